@@ -1,0 +1,113 @@
+"""The Dubins car family of eq. (5.1), a circular keep-out set, and a closed-form avoid value.
+
+State ``x = (x, y, theta)`` with position relative to the centre of a disk obstacle
+``K = {|p| <= r}``; the car moves at constant speed ``v`` (3 in eq. 5.1) and turns at
+``u in [-w_max, w_max]`` (``w_max = 1`` for the true robots, a family over ``w_max`` for the
+supervisor library of Fig. 4.2). An optional disturbance ``d`` pushes the position at
+speed at most ``d_max`` (a Euclidean ball), playing the role of ``d`` in eq. (4.1).
+
+Closed-form avoid value (no disturbance; our derivation, the oracle of the tests)::
+
+    R = v / w_max, p = (x, y), h = (cos theta, sin theta),
+    c+- = p +- R (-sin theta, cos theta)         (left / right turning-circle centres)
+    V(x) = |p| - r                                if p . h >= 0   (not approaching)
+    V(x) = max_+- ( | |c+-| - R | - r )            otherwise
+
+An approaching car does best by turning hard one way until it stops approaching (then
+driving straight): along a turning circle the closest point to the obstacle centre lies
+at distance ``| |c| - R |``, and it is reached before the car starts to move away.
+"""
+
+import jax.numpy as jnp
+import numpy as np
+from hj_reachability import dynamics, sets
+
+SPEED = 3.0  # eq. (5.1)
+TRUE_W_MAX = 1.0  # eq. (5.1)
+
+
+def _check_positive(name, value):
+    if not np.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+
+
+def check_states(states, name="states"):
+    """Return ``states`` as a float array of shape (n, 3) or raise a ValueError naming ``name``."""
+    arr = np.asarray(states, dtype=float)
+    if arr.ndim == 1 and arr.shape == (3,):
+        arr = arr[None]
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (n, 3) for (x, y, theta), got {np.shape(states)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains NaN or infinite entries")
+    return arr
+
+
+class DubinsCar(dynamics.ControlAndDisturbanceAffineDynamics):
+    """Eq. (5.1) as hj-reachability dynamics: the control maximises V (avoid), the disturbance minimises it.
+
+    ``w_max`` may be a JAX tracer, so one compiled solver serves the whole family.
+    """
+
+    def __init__(self, w_max=TRUE_W_MAX, speed=SPEED, d_max=0.0):
+        self.w_max = w_max
+        self.speed = speed
+        self.d_max = d_max
+        control_space = sets.Box(jnp.array([-1.0]) * w_max, jnp.array([1.0]) * w_max)
+        disturbance_space = sets.Ball(jnp.zeros(2), jnp.asarray(d_max, dtype=float))
+        super().__init__("max", "min", control_space, disturbance_space)
+
+    def open_loop_dynamics(self, state, time):
+        return jnp.array([self.speed * jnp.cos(state[2]), self.speed * jnp.sin(state[2]), 0.0])
+
+    def control_jacobian(self, state, time):
+        return jnp.array([[0.0], [0.0], [1.0]])
+
+    def disturbance_jacobian(self, state, time):
+        return jnp.array([[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
+
+
+def keep_out_margin(states, radius):
+    """The payoff ``l(x) = |p| - r`` of eq. (4.3): negative inside the disk K, positive outside."""
+    _check_positive("radius", radius)
+    s = np.asarray(states, dtype=float)
+    return np.hypot(s[..., 0], s[..., 1]) - radius
+
+
+def unsafe_reach(w_max, radius, speed=SPEED):
+    """How far ahead of the obstacle centre the unsafe set reaches: ``sqrt(2 R r + r^2)``, ``R = v / w_max``."""
+    _check_positive("w_max", w_max)
+    _check_positive("radius", radius)
+    _check_positive("speed", speed)
+    return float(np.sqrt(2 * speed / w_max * radius + radius ** 2))
+
+
+def avoid_value_closed_form(states, w_max, radius, speed=SPEED, tol=1e-9):
+    """The exact avoid value ``V(x)`` of eq. (4.3) for a disk and no disturbance (module docstring)."""
+    _check_positive("w_max", w_max)
+    _check_positive("radius", radius)
+    _check_positive("speed", speed)
+    s = check_states(states)
+    big_r = speed / w_max
+    p = s[:, :2]
+    heading = np.stack([np.cos(s[:, 2]), np.sin(s[:, 2])], axis=1)
+    normal = np.stack([-np.sin(s[:, 2]), np.cos(s[:, 2])], axis=1)
+    turning = [np.abs(np.linalg.norm(p + sign * big_r * normal, axis=1) - big_r) for sign in (1, -1)]
+    approaching = np.einsum("ij,ij->i", p, heading) < -tol
+    return np.where(approaching, np.maximum(*turning), np.linalg.norm(p, axis=1)) - radius
+
+
+def dubins_step(states, controls, dt, speed=SPEED):
+    """Integrate eq. (5.1) exactly over ``dt`` with constant turn rates ``controls`` (vectorised over cars)."""
+    s = check_states(states)
+    u = np.broadcast_to(np.asarray(controls, dtype=float), (len(s),))
+    if not np.all(np.isfinite(u)):
+        raise ValueError("controls contains NaN or infinite entries")
+    theta = s[:, 2]
+    turn = u * dt
+    # the chord of the arc: length v * 2 sin(u dt / 2) / u (finite as u -> 0), direction theta + u dt / 2
+    chord = speed * dt * np.sinc(turn / (2 * np.pi))
+    mid = theta + turn / 2
+    x = s[:, 0] + chord * np.cos(mid)
+    y = s[:, 1] + chord * np.sin(mid)
+    return np.stack([x, y, np.angle(np.exp(1j * (theta + turn)))], axis=1)

@@ -1,0 +1,300 @@
+"""Iterative LQR (Todorov & Li 2005) with Tassa-style regularisation, for eq. (6.4) in discrete time.
+
+The problem, with ``x_0`` given and the horizon ``N`` set by the control sequence::
+
+    min_u  sum_{k<N} running_cost(x_k, u_k, params) + terminal_cost(x_N, params)
+    s.t.   x_{k+1} = dynamics(x_k, u_k, params)
+
+The three callables are written with ``jax.numpy``; their derivatives come from
+JAX autodiff (exact, no finite differences) and every step of the algorithm is
+jit-compiled once per set of callables (``params`` is traced, so a family of
+problems shares one compilation). All arithmetic is float64.
+
+Each iteration linearises the dynamics and takes a second-order model of the cost
+along the current trajectory (Gauss-Newton: the dynamics' curvature is dropped),
+runs the Riccati-like backward pass for an affine policy ``du = k + K dx``, and
+rolls the policy out with a backtracking line search over step sizes (all sizes
+evaluated at once, the first to pass the Armijo test is taken). Objectives need
+not be convex, e.g. the legible ``(1 + alpha) J1 - J0`` of eq. (6.15): the
+control block ``Q_uu`` of the model is regularised to ``Q_uu + mu I`` with the
+schedule of Tassa, Erez & Todorov (2012) whenever it is not positive definite.
+
+An objective that is unbounded below, or a run that diverges, raises
+:class:`ILQRError` with the reason (regularisation exhausted, trajectory or cost
+blowing up, no convergence), instead of returning a meaningless trajectory.
+"""
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.scipy.linalg import cho_solve
+
+STEP_SIZES = 0.5 ** np.arange(11)  # backtracking line search 1, 1/2, ..., 1/1024
+ARMIJO = 1e-4  # accept a step whose actual decrease is at least this fraction of the predicted one
+
+
+class ILQRError(RuntimeError):
+    """iLQR could not find a local minimum: the objective is unbounded below or the run diverged."""
+
+
+@dataclass(frozen=True)
+class ILQRResult:
+    """A converged iLQR solution.
+
+    ``xs`` (N+1, n) states, ``us`` (N, m) controls, ``K`` (N, m, n) the feedback gains
+    of the last backward pass, ``cost`` the objective, ``iterations`` the number of
+    accepted steps, ``costs`` the objective after each of them (starting with the
+    initial guess), ``reg`` the regularisation ``mu`` of the last backward pass.
+    """
+
+    xs: np.ndarray
+    us: np.ndarray
+    K: np.ndarray
+    cost: float
+    iterations: int
+    costs: np.ndarray
+    reg: float
+
+
+def _x64(fn):
+    """Run ``fn`` (and everything it traces or compiles) with 64-bit JAX types."""
+    def wrapped(*args, **kwargs):
+        with jax.enable_x64(True):
+            return fn(*args, **kwargs)
+    wrapped.__name__, wrapped.__doc__ = fn.__name__, fn.__doc__
+    return wrapped
+
+
+@lru_cache(maxsize=64)
+def _kernels(dynamics, running_cost, terminal_cost):
+    """Jit-compiled rollout, cost, derivatives, backward pass and line search for one problem."""
+
+    def rollout(x0, us, params):
+        def step(x, u):
+            x_next = dynamics(x, u, params)
+            return x_next, x_next
+        _, xs = jax.lax.scan(step, x0, us)
+        return jnp.concatenate([x0[None], xs])
+
+    def total_cost(xs, us, params):
+        running = jax.vmap(running_cost, in_axes=(0, 0, None))(xs[:-1], us, params)
+        return jnp.sum(running) + terminal_cost(xs[-1], params)
+
+    def shooting_cost(us, x0, params):
+        return total_cost(rollout(x0, us, params), us, params)
+
+    def quadratic_model(xs, us, params):
+        x, u = xs[:-1], us
+        fx = jax.vmap(jax.jacfwd(dynamics, 0), in_axes=(0, 0, None))(x, u, params)
+        fu = jax.vmap(jax.jacfwd(dynamics, 1), in_axes=(0, 0, None))(x, u, params)
+        lx = jax.vmap(jax.grad(running_cost, 0), in_axes=(0, 0, None))(x, u, params)
+        lu = jax.vmap(jax.grad(running_cost, 1), in_axes=(0, 0, None))(x, u, params)
+        hess = jax.vmap(jax.hessian(running_cost, (0, 1)), in_axes=(0, 0, None))(x, u, params)
+        (lxx, lxu), (lux, luu) = hess
+        del lxu
+        Vx = jax.grad(terminal_cost)(xs[-1], params)
+        Vxx = jax.hessian(terminal_cost)(xs[-1], params)
+        return (fx, fu, lx, lu, lxx, lux, luu), (Vx, Vxx)
+
+    def backward(model, terminal, mu):
+        """Backward pass; returns gains, predicted decrease terms and whether every Q_uu + mu I was PD."""
+        m = model[1].shape[-1]
+
+        def step(carry, stage):
+            Vx, Vxx, lam = carry
+            fx, fu, lx, lu, lxx, lux, luu = stage
+            grad = lu + fu.T @ lam  # exact gradient dJ/du_k by the adjoint recursion
+            Qx = lx + fx.T @ Vx
+            Qu = lu + fu.T @ Vx
+            Qxx = lxx + fx.T @ Vxx @ fx
+            Quu = luu + fu.T @ Vxx @ fu
+            Qux = lux + fu.T @ Vxx @ fx
+            chol = jnp.linalg.cholesky(0.5 * (Quu + Quu.T) + mu * jnp.eye(m))
+            ok = jnp.all(jnp.isfinite(chol))
+            k = -cho_solve((chol, True), Qu)
+            K = -cho_solve((chol, True), Qux)
+            Vx = Qx + K.T @ Quu @ k + K.T @ Qu + Qux.T @ k
+            Vxx = Qxx + K.T @ Quu @ K + K.T @ Qux + Qux.T @ K
+            lam = lx + fx.T @ lam
+            return (Vx, 0.5 * (Vxx + Vxx.T), lam), (k, K, k @ Qu, 0.5 * k @ Quu @ k, ok, grad)
+
+        Vx, Vxx = terminal
+        _, (k, K, d1, d2, ok, grad) = jax.lax.scan(step, (Vx, Vxx, Vx), model, reverse=True)
+        return k, K, jnp.sum(d1), jnp.sum(d2), jnp.all(ok), jnp.max(jnp.abs(grad))
+
+    def line_search(x0, xs, us, cost, k, K, d1, d2, params):
+        """Roll out ``u + a k + K dx`` for every step size ``a``; keep the largest that passes Armijo."""
+        def trial(a):
+            def step(x, stage):
+                x_ref, u_ref, kk, KK = stage
+                u = u_ref + a * kk + KK @ (x - x_ref)
+                x_next = dynamics(x, u, params)
+                return x_next, (x_next, u)
+            _, (x_new, u_new) = jax.lax.scan(step, x0, (xs[:-1], us, k, K))
+            x_new = jnp.concatenate([x0[None], x_new])
+            return x_new, u_new, total_cost(x_new, u_new, params)
+
+        steps = jnp.asarray(STEP_SIZES)
+        x_all, u_all, c_all = jax.vmap(trial)(steps)
+        predicted = -(steps * d1 + steps ** 2 * d2)
+        accept = jnp.isfinite(c_all) & (cost - c_all >= ARMIJO * predicted)
+        best = jnp.argmax(accept)
+        return x_all[best], u_all[best], c_all[best], jnp.any(accept), steps[best]
+
+    def iterate(x0, xs, us, cost, params, mu):
+        model, terminal = quadratic_model(xs, us, params)
+        k, K, d1, d2, ok, grad = backward(model, terminal, mu)
+        x_new, u_new, c_new, accepted, _ = line_search(x0, xs, us, cost, k, K, d1, d2, params)
+        return x_new, u_new, c_new, accepted & ok, ok, K, grad
+
+    return (jax.jit(rollout), jax.jit(total_cost), jax.jit(jax.value_and_grad(shooting_cost)),
+            jax.jit(iterate))
+
+
+def _check_problem(dynamics, running_cost, terminal_cost, x0, us, params):
+    """Validate shapes and outputs of the callables up front (abstract evaluation only)."""
+    for name, fn in (("dynamics", dynamics), ("running_cost", running_cost), ("terminal_cost", terminal_cost)):
+        if not callable(fn):
+            raise ValueError(f"{name} must be callable, got {type(fn).__name__}")
+    x0 = np.asarray(x0, dtype=float)
+    us = np.asarray(us, dtype=float)
+    if x0.ndim != 1:
+        raise ValueError(f"x0 must be a state vector, got shape {x0.shape}")
+    if us.ndim != 2 or us.shape[0] < 1:
+        raise ValueError(f"us must have shape (N, m) with N >= 1, got {us.shape}")
+    if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(us))):
+        raise ValueError("x0 and us must be finite")
+    x_spec = jax.ShapeDtypeStruct(x0.shape, jnp.float64)
+    u_spec = jax.ShapeDtypeStruct(us.shape[1:], jnp.float64)
+    out = jax.eval_shape(lambda x, u: dynamics(x, u, params), x_spec, u_spec)
+    if out.shape != x0.shape:
+        raise ValueError(f"dynamics must map a state of shape {x0.shape} to the same shape, got {out.shape}")
+    for name, shape in (("running_cost", jax.eval_shape(lambda x, u: running_cost(x, u, params), x_spec, u_spec).shape),
+                        ("terminal_cost", jax.eval_shape(lambda x: terminal_cost(x, params), x_spec).shape)):
+        if shape != ():
+            raise ValueError(f"{name} must return a scalar, got shape {shape}")
+    return jnp.asarray(x0), jnp.asarray(us)
+
+
+@_x64
+def rollout(dynamics, x0, us, params=None):
+    """States ``x_0..x_N`` (N+1, n) reached from ``x0`` under the controls ``us`` (N, m)."""
+    x0, us = _check_problem(dynamics, _no_cost, _no_terminal_cost, x0, us, params)
+    return np.asarray(_kernels(dynamics, _no_cost, _no_terminal_cost)[0](x0, us, params))
+
+
+def _no_cost(x, u, params):
+    return jnp.zeros(())
+
+
+def _no_terminal_cost(x, params):
+    return jnp.zeros(())
+
+
+@_x64
+def trajectory_cost(dynamics, running_cost, terminal_cost, x0, us, params=None):
+    """The single-shooting objective ``H_J(u)`` of eq. (6.6): the total cost of the rollout of ``us``."""
+    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
+    value, _ = _kernels(dynamics, running_cost, terminal_cost)[2](us, x0, params)
+    return float(value)
+
+
+@_x64
+def trajectory_cost_grad(dynamics, running_cost, terminal_cost, x0, us, params=None):
+    """``(H_J(u), dH_J/du)``: the single-shooting objective and its autodiff gradient (N, m)."""
+    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
+    value, grad = _kernels(dynamics, running_cost, terminal_cost)[2](us, x0, params)
+    return float(value), np.asarray(grad)
+
+
+@_x64
+def solve_single_shooting(dynamics, running_cost, terminal_cost, x0, us0, params=None, gtol=1e-8,
+                          max_iter=20000):
+    """Minimise ``H_J(u)`` over the flattened controls with scipy L-BFGS (the baseline to iLQR).
+
+    Uses the same jit-compiled objective and autodiff gradient as iLQR's line search;
+    returns ``(us, cost, scipy_result)``.
+    """
+    from scipy.optimize import minimize
+
+    x0, us0 = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
+    value_and_grad = _kernels(dynamics, running_cost, terminal_cost)[2]
+    shape = us0.shape
+
+    def fun(flat):
+        value, grad = value_and_grad(jnp.asarray(flat.reshape(shape)), x0, params)
+        return float(value), np.asarray(grad, dtype=float).ravel()
+
+    res = minimize(fun, np.asarray(us0).ravel(), jac=True, method="L-BFGS-B",
+                   options={"maxiter": max_iter, "maxfun": 2 * max_iter, "gtol": gtol, "ftol": 1e-15})
+    return res.x.reshape(shape), float(res.fun), res
+
+
+@_x64
+def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=200, grad_tol=1e-9,
+         stall_tol=1e-14, reg_max=1e10, divergence_bound=1e6):
+    """Minimise the total cost from ``x0`` by iLQR, starting from the controls ``us0`` (N, m).
+
+    Converged when every ``Q_uu + mu I`` is positive definite and the exact gradient
+    ``dJ/du`` (adjoint recursion) is at most ``grad_tol * (1 + |cost|)`` in every
+    entry, or when an accepted step improves the cost by less than
+    ``stall_tol * (1 + |cost|)`` (rounding level). Raises :class:`ILQRError` when the
+    regularisation needed exceeds ``reg_max``, when states, controls or the cost
+    exceed ``divergence_bound`` in size or become non-finite, or after ``max_iter``
+    iterations without convergence.
+    """
+    if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
+        raise ValueError(f"max_iter must be a positive integer, got {max_iter!r}")
+    for name, value in (("grad_tol", grad_tol), ("stall_tol", stall_tol), ("reg_max", reg_max),
+                        ("divergence_bound", divergence_bound)):
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
+    roll, cost_of, _, iterate = _kernels(dynamics, running_cost, terminal_cost)
+    xs = roll(x0, us, params)
+    cost = float(cost_of(xs, us, params))
+    if not np.isfinite(cost):
+        raise ILQRError(f"the initial guess has a non-finite cost ({cost})")
+
+    mu, delta = 0.0, 1.0  # Tassa's regularisation and its growth factor
+    mu_min, delta0 = 1e-6, 2.0
+    costs = [cost]
+    for _ in range(max_iter):
+        x_new, u_new, c_new, accepted, pd, K, grad = iterate(x0, xs, us, cost, params, mu)
+        grad = float(grad)
+
+        def result():
+            return ILQRResult(xs=np.asarray(xs), us=np.asarray(us), K=np.asarray(K), cost=cost,
+                              iterations=len(costs) - 1, costs=np.asarray(costs), reg=mu)
+
+        if bool(pd) and grad <= grad_tol * (1 + abs(cost)):
+            return result()
+        if not bool(accepted):  # Q_uu not positive definite, or no step size decreased the cost
+            delta = max(delta0, delta * delta0)
+            mu = max(mu_min, mu * delta)
+            if mu > reg_max:
+                why = ("the control Hessian Q_uu stayed indefinite" if not bool(pd)
+                       else "no step along the regularised direction decreased the cost")
+                raise ILQRError(f"iLQR failed: {why} up to regularisation mu = {reg_max:g} (cost {cost:.6g}, "
+                                f"largest gradient entry {grad:.3g} after {len(costs) - 1} steps); "
+                                "the objective is probably unbounded below or not smooth")
+            continue
+        improvement = cost - float(c_new)
+        xs, us, cost = x_new, u_new, float(c_new)
+        costs.append(cost)
+        size = max(float(jnp.max(jnp.abs(xs))), float(jnp.max(jnp.abs(us))), abs(cost))
+        if not np.isfinite(size) or size > divergence_bound:
+            raise ILQRError(f"iLQR diverged: after {len(costs) - 1} steps the cost is {cost:.6g} and the largest "
+                            f"|state|, |control| or |cost| is {size:.3g} > divergence_bound = {divergence_bound:g}; "
+                            "the objective is unbounded below (for a legible objective (1 + alpha) J1 - J0, "
+                            "increase alpha or shorten the horizon)")
+        if improvement <= stall_tol * (1 + abs(cost)):
+            return result()
+        delta = min(1 / delta0, delta / delta0)
+        mu = mu * delta if mu * delta > mu_min else 0.0
+    raise ILQRError(f"iLQR did not converge in {max_iter} iterations (cost {cost:.6g}, still falling by "
+                    f"{costs[-2] - costs[-1] if len(costs) > 1 else float('nan'):.3g} per step, largest "
+                    f"gradient entry {grad:.3g}); the objective may be unbounded below or badly scaled")

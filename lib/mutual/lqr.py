@@ -1,0 +1,145 @@
+"""Finite-horizon linear-quadratic optimal control by the Riccati recursion.
+
+The problem (discrete time, horizon ``N``, the LQ case of eqs. (6.1), (6.3)-(6.4))::
+
+    min_u  sum_{k<N} [ 1/2 x_k'Q_k x_k + q_k'x_k + 1/2 u_k'R_k u_k + r_k'u_k + x_k'M_k u_k ]
+           + 1/2 x_N'Q_N x_N + q_N'x_N
+    s.t.   x_{k+1} = A_k x_k + B_k u_k + c_k,   x_0 given.
+
+Every stage array may be given once (time-invariant, e.g. ``A`` of shape (n, n))
+or per stage (time-varying, ``A`` of shape (N, n, n)). ``Q_k`` need not be
+positive semidefinite (legible objectives subtract costs, eq. (6.15)): the
+problem is bounded below with a unique minimiser exactly when every
+``Q_uu,k = R_k + B_k'V_{k+1}B_k`` of the backward pass is positive definite,
+and :func:`solve_lq` raises a ValueError naming the first stage where it is not.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class LQSolution:
+    """Optimal trajectory and policy of a finite-horizon LQ problem.
+
+    ``xs`` (N+1, n) states, ``us`` (N, m) controls, ``K`` (N, m, n) and ``k``
+    (N, m) the affine feedback policy ``u_k = K_k x_k + k_k``, ``V`` (N+1, n, n)
+    and ``v`` (N+1, n) the cost-to-go ``1/2 x'V_k x + v_k'x + const``, and
+    ``cost`` the optimal objective value (no constant terms are included).
+    """
+
+    xs: np.ndarray
+    us: np.ndarray
+    K: np.ndarray
+    k: np.ndarray
+    V: np.ndarray
+    v: np.ndarray
+    cost: float
+
+
+def _stage(name, value, N, shape):
+    """Broadcast a stage array to (N, *shape), or raise naming the argument."""
+    a = np.asarray(value, dtype=float)
+    if a.shape == shape:
+        return np.broadcast_to(a, (N, *shape))
+    if a.shape == (N, *shape):
+        return a
+    raise ValueError(f"{name} has shape {a.shape}; expected {shape} (time-invariant) or {(N, *shape)} (per stage)")
+
+
+def _terminal(name, value, shape):
+    a = np.asarray(value, dtype=float)
+    if a.shape != shape:
+        raise ValueError(f"{name} has shape {a.shape}; expected {shape}")
+    return a
+
+
+def _is_finite(name, a):
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains non-finite values")
+    return a
+
+
+def lq_cost(xs, us, Q, R, q=None, r=None, QN=None, qN=None, M=None):
+    """Objective value of a given trajectory ``(xs, us)`` under the LQ cost above."""
+    xs, us = np.asarray(xs, float), np.asarray(us, float)
+    N, m = us.shape
+    n = xs.shape[1]
+    Q, R = _stage("Q", Q, N, (n, n)), _stage("R", R, N, (m, m))
+    q = _stage("q", np.zeros(n) if q is None else q, N, (n,))
+    r = _stage("r", np.zeros(m) if r is None else r, N, (m,))
+    M = _stage("M", np.zeros((n, m)) if M is None else M, N, (n, m))
+    QN = _terminal("QN", np.zeros((n, n)) if QN is None else QN, (n, n))
+    qN = _terminal("qN", np.zeros(n) if qN is None else qN, (n,))
+    x, xN = xs[:-1], xs[-1]
+    running = (0.5 * np.einsum("ki,kij,kj->", x, Q, x) + np.einsum("ki,ki->", q, x)
+               + 0.5 * np.einsum("ki,kij,kj->", us, R, us) + np.einsum("ki,ki->", r, us)
+               + np.einsum("ki,kij,kj->", x, M, us))
+    return float(running + 0.5 * xN @ QN @ xN + qN @ xN)
+
+
+def solve_lq(A, B, Q, R, x0, N, q=None, r=None, QN=None, qN=None, M=None, c=None, rtol=1e-9):
+    """Solve the finite-horizon LQ problem above exactly (backward Riccati pass,
+    forward rollout); return an :class:`LQSolution`.
+
+    ``A`` (n, n) or (N, n, n); ``B`` (n, m) or (N, n, m); ``Q`` (n, n) or (N, n, n);
+    ``R`` (m, m) or (N, m, m); ``q``, ``r``, ``M``, ``c`` likewise (default zero);
+    ``QN`` (n, n) and ``qN`` (n,) the terminal cost (default zero).
+    Raises ValueError when the problem is unbounded below or has no unique
+    minimiser (some ``Q_uu,k`` has an eigenvalue <= ``rtol`` times its scale).
+    """
+    if not isinstance(N, (int, np.integer)) or N < 1:
+        raise ValueError(f"N must be a positive integer, got {N!r}")
+    x0 = _is_finite("x0", np.asarray(x0, dtype=float))
+    if x0.ndim != 1:
+        raise ValueError(f"x0 must be a vector, got shape {x0.shape}")
+    n = x0.shape[0]
+    B_arr = np.asarray(B, dtype=float)
+    if B_arr.ndim not in (2, 3) or B_arr.shape[-2] != n:
+        raise ValueError(f"B has shape {B_arr.shape}; expected ({n}, m) or ({N}, {n}, m)")
+    m = B_arr.shape[-1]
+    A = _is_finite("A", _stage("A", A, N, (n, n)))
+    B = _is_finite("B", _stage("B", B_arr, N, (n, m)))
+    Q = _is_finite("Q", _stage("Q", Q, N, (n, n)))
+    R = _is_finite("R", _stage("R", R, N, (m, m)))
+    q = _is_finite("q", _stage("q", np.zeros(n) if q is None else q, N, (n,)))
+    r = _is_finite("r", _stage("r", np.zeros(m) if r is None else r, N, (m,)))
+    M = _is_finite("M", _stage("M", np.zeros((n, m)) if M is None else M, N, (n, m)))
+    c = _is_finite("c", _stage("c", np.zeros(n) if c is None else c, N, (n,)))
+    QN = _is_finite("QN", _terminal("QN", np.zeros((n, n)) if QN is None else QN, (n, n)))
+    qN = _is_finite("qN", _terminal("qN", np.zeros(n) if qN is None else qN, (n,)))
+
+    V = np.empty((N + 1, n, n))
+    v = np.empty((N + 1, n))
+    K = np.empty((N, m, n))
+    kff = np.empty((N, m))
+    V[N], v[N] = 0.5 * (QN + QN.T), qN
+    for t in range(N - 1, -1, -1):
+        At, Bt = A[t], B[t]
+        VB = V[t + 1] @ Bt
+        vc = v[t + 1] + V[t + 1] @ c[t]
+        Quu = R[t] + Bt.T @ VB
+        Quu = 0.5 * (Quu + Quu.T)
+        Qux = M[t].T + VB.T @ At
+        eig = np.linalg.eigvalsh(Quu)
+        scale = np.abs(R[t]).max() + np.abs(Bt.T @ VB).max()
+        if eig[0] <= rtol * scale:
+            raise ValueError(
+                f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} has eigenvalue "
+                f"{eig[0]:.3g} (not positive definite), so the cost has no unique finite minimiser "
+                "(for a legible objective (1+alpha) J1 - J0 with x' = u this means alpha <= 0)")
+        KK = -np.linalg.solve(Quu, np.concatenate([Qux, (r[t] + Bt.T @ vc)[:, None]], axis=1))
+        K[t], kff[t] = KK[:, :n], KK[:, n]
+        Vt = Q[t] + At.T @ V[t + 1] @ At + Qux.T @ K[t]
+        V[t] = 0.5 * (Vt + Vt.T)
+        v[t] = q[t] + At.T @ vc + Qux.T @ kff[t]
+
+    xs = np.empty((N + 1, n))
+    us = np.empty((N, m))
+    xs[0] = x0
+    for t in range(N):
+        us[t] = K[t] @ xs[t] + kff[t]
+        xs[t + 1] = A[t] @ xs[t] + B[t] @ us[t] + c[t]
+    cost = lq_cost(xs, us, Q, R, q, r, QN, qN, M)
+    return LQSolution(xs=xs, us=us, K=K, k=kff, V=V, v=v, cost=cost)

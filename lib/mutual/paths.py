@@ -1,0 +1,30 @@
+"""Every path of the compendium, anchored at the repository root.
+
+Outputs go to ``figures/`` unless ``MUTUAL_OUTPUT_DIR`` points elsewhere (the
+notebook tests use a temporary folder so that quick runs never overwrite the
+committed figures); caches go to ``.cache/`` unless ``MUTUAL_CACHE_DIR`` is set.
+"""
+
+import os
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+DATA = ROOT / "data"
+NOTEBOOKS = ROOT / "notebooks"
+BUILD = ROOT / "build"
+CLAIMS = DATA / "paper_claims.csv"
+
+
+def figures_dir() -> Path:
+    """Folder for figures and tables (``MUTUAL_OUTPUT_DIR`` or ``figures/``)."""
+    return Path(os.environ.get("MUTUAL_OUTPUT_DIR", ROOT / "figures"))
+
+
+def results_dir() -> Path:
+    """Folder for the per-notebook result files read by the reproduction report."""
+    return figures_dir() / "results"
+
+
+def cache_dir() -> Path:
+    """Folder for expensive cached results (``MUTUAL_CACHE_DIR`` or ``.cache/``)."""
+    return Path(os.environ.get("MUTUAL_CACHE_DIR", ROOT / ".cache"))

@@ -1,0 +1,39 @@
+"""Shared test set-up: quiet, single-threaded numerics and a private output folder,
+so no test ever writes into the committed ``figures/``."""
+
+import json
+import os
+import tempfile
+
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
+os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
+os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")
+
+from mutual.notebooks import NotebookError, execute  # noqa: E402
+from mutual.paths import NOTEBOOKS, results_dir  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def executed_notebook():
+    """``executed_notebook(stem)`` runs ``notebooks/<stem>.ipynb`` once per session with
+    ``quick=True`` in a fresh kernel and returns its results ``{claim_id: entry}``."""
+    outcome = {}
+
+    def run(stem):
+        if stem not in outcome:
+            try:
+                execute(NOTEBOOKS / f"{stem}.ipynb", {"quick": True}, timeout=900)
+                path = results_dir() / f"{stem}.json"
+                outcome[stem] = json.loads(path.read_text())["claims"] if path.exists() else {}
+            except (NotebookError, ValueError) as err:
+                outcome[stem] = err
+        if isinstance(outcome[stem], Exception):
+            pytest.fail(str(outcome[stem]))
+        return outcome[stem]
+
+    return run

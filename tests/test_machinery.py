@@ -1,0 +1,169 @@
+"""The compendium's machinery: paths, atomic writes, deterministic figures,
+results files, the reproduction report and the notebook runner."""
+
+import hashlib
+import json
+import subprocess
+import sys
+import textwrap
+
+import nbformat
+import pandas as pd
+import pytest
+
+import mutual.paths as paths
+from mutual.atomic import atomic_path
+from mutual.claims import verdict
+from mutual.figures import save_table, savefig
+from mutual.notebooks import NotebookError, declared_parameters, execute
+from mutual.report import build_report
+from mutual.results import write_results
+
+
+def test_root_is_independent_of_working_directory(tmp_path):
+    out = subprocess.run([sys.executable, "-c", "import mutual.paths as p; print(p.ROOT)"],
+                         cwd=tmp_path, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == str(paths.ROOT)
+    assert (paths.ROOT / "pyproject.toml").exists()
+
+
+def test_atomic_write_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "fig.png"
+    with pytest.raises(RuntimeError):
+        with atomic_path(target) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError("interrupted")
+    assert list(tmp_path.iterdir()) == []
+
+
+FIGURE_SCRIPT = textwrap.dedent("""
+    import numpy as np, matplotlib.pyplot as plt
+    from mutual.figures import use_style, savefig
+    use_style()
+    fig, ax = plt.subplots()
+    ax.plot(np.linspace(0, 1, 50) ** 2, label="a")
+    ax.contourf(np.random.default_rng(0).random((5, 5)))
+    ax.legend()
+    savefig(fig, "fig_9_1")
+""")
+
+
+def _digests(folder):
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+
+
+def test_figures_are_byte_identical_across_runs(tmp_path):
+    digests = []
+    for run in ("a", "b"):
+        out = tmp_path / run
+        env = {**__import__("os").environ, "MUTUAL_OUTPUT_DIR": str(out), "MPLBACKEND": "Agg"}
+        env.pop("SOURCE_DATE_EPOCH", None)
+        subprocess.run([sys.executable, "-c", FIGURE_SCRIPT], env=env, check=True)
+        digests.append(_digests(out))
+    assert set(digests[0]) == {"fig_9_1.pdf", "fig_9_1.png"}
+    assert digests[0] == digests[1]
+
+
+def test_figure_and_table_names_are_checked(tmp_path, monkeypatch):
+    monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(tmp_path))
+    with pytest.raises(ValueError, match="fig_3_1"):
+        savefig(None, "figure3")
+    with pytest.raises(ValueError, match="table"):
+        save_table(pd.DataFrame({"a": [1]}), "fig_5_1")
+    save_table(pd.DataFrame({"set": ["Standard"], "fp": [1.25]}), "table_9_1")
+    assert (tmp_path / "table_9_1.md").read_text().splitlines()[0] == "| set | fp |"
+
+
+CLAIMS = pd.DataFrame([
+    {"id": "c9-abs", "chapter": "9", "section": "9.1", "statement": "x is 0.29", "thesis_value": "0.29",
+     "compare": "abs:0.02", "figure": "fig_9_1"},
+    {"id": "c9-ge", "chapter": "9", "section": "9.1", "statement": "over 97%", "thesis_value": "0.97",
+     "compare": ">=", "figure": ""},
+    {"id": "c9-true", "chapter": "9", "section": "9.2", "statement": "nesting holds", "thesis_value": "true",
+     "compare": "true", "figure": ""},
+    {"id": "c9-human", "chapter": "9", "section": "9.3", "statement": "F(2, 20) = 8.72", "thesis_value": "8.72",
+     "compare": "original-data", "figure": ""},
+    {"id": "c9-pending", "chapter": "9", "section": "9.3", "statement": "later", "thesis_value": "1",
+     "compare": "rel:0.1", "figure": ""},
+])
+
+
+@pytest.fixture
+def claims_file(tmp_path, monkeypatch):
+    path = tmp_path / "claims.csv"
+    CLAIMS.to_csv(path, index=False)
+    monkeypatch.setattr(paths, "CLAIMS", path)
+    monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(tmp_path / "figures"))
+    return path
+
+
+@pytest.mark.parametrize("cid, got, expected", [
+    ("c9-abs", 0.30, "reproduced"), ("c9-abs", 0.35, "differs"), ("c9-ge", 0.98, "reproduced"),
+    ("c9-ge", 0.90, "differs"), ("c9-true", True, "reproduced"), ("c9-true", False, "differs"),
+    ("c9-human", 3.1, "not reproducible without the original data"), ("c9-pending", None, "pending"),
+])
+def test_verdicts(cid, got, expected):
+    row = CLAIMS.set_index("id").loc[cid].to_dict() | {"id": cid}
+    assert verdict(row, got) == expected
+
+
+def test_report_lists_every_claim_with_its_verdict(claims_file):
+    write_results("09_demo", {"c9-abs": 0.3, "c9-ge": {"value": 0.99, "note": "n = 50"},
+                              "c9-true": True, "c9-human": {"value": 4.0, "simulated": True}})
+    text = build_report().read_text()
+    rows = {line.split(" | ")[0].strip("| "): line for line in text.splitlines() if line.startswith("| c9-")}
+    assert set(rows) == set(CLAIMS["id"])
+    assert "| reproduced |" in rows["c9-abs"] and "| pending |" in rows["c9-pending"]
+    assert "0.99 (n = 50)" in rows["c9-ge"]
+    assert "| not reproducible without the original data | yes |" in rows["c9-human"]
+    assert "3 reproduced, 0 differs, 1 not reproducible without the original data, 1 pending" in text
+
+
+def test_unknown_claim_id_is_an_error(claims_file, tmp_path):
+    with pytest.raises(ValueError, match="c9-nope"):
+        write_results("09_demo", {"c9-nope": 1.0})
+    results = tmp_path / "figures" / "results"
+    results.mkdir(parents=True)
+    (results / "09_demo.json").write_text(json.dumps({"notebook": "09_demo", "claims": {"c9-nope": {
+        "value": 1.0, "simulated": False, "note": ""}}}))
+    with pytest.raises(ValueError, match="unknown claim id 'c9-nope'"):
+        build_report()
+
+
+def test_non_finite_results_are_refused(claims_file):
+    with pytest.raises(ValueError, match="not finite"):
+        write_results("09_demo", {"c9-abs": float("nan")})
+
+
+def _notebook(tmp_path, *sources, tagged=True):
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["kernelspec"] = {"name": "mutual", "display_name": "Python (mutual)", "language": "python"}
+    nb.cells = [nbformat.v4.new_code_cell(s) for s in sources]
+    if tagged:
+        nb.cells[0].metadata["tags"] = ["parameters"]
+    path = tmp_path / "99_demo.ipynb"
+    nbformat.write(nb, path)
+    return path
+
+
+def test_runner_names_the_failing_cell(tmp_path):
+    path = _notebook(tmp_path, "quick = False", "x = 1", "raise RuntimeError('boom')")
+    with pytest.raises(NotebookError, match=r"99_demo.ipynb failed in code cell 3 \(\"raise RuntimeError\(.boom.\)\"\): RuntimeError: boom"):
+        execute(path, {"quick": True})
+
+
+def test_runner_requires_declared_parameters(tmp_path):
+    with pytest.raises(ValueError, match="exactly one cell tagged 'parameters'"):
+        declared_parameters(_notebook(tmp_path, "quick = False", tagged=False))
+    with pytest.raises(ValueError, match="must declare 'quick'"):
+        declared_parameters(_notebook(tmp_path, "seed = 0"))
+    with pytest.raises(ValueError, match="no parameter named 'n_demos'"):
+        execute(_notebook(tmp_path, "quick = False"), {"n_demos": 3})
+
+
+def test_make_figures_runner_exits_non_zero_naming_the_notebook(tmp_path):
+    path = _notebook(tmp_path, "quick = False", "1 / 0")
+    out = subprocess.run([sys.executable, "-m", "mutual.notebooks", "--quick", str(path)],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode != 0
+    assert "99_demo.ipynb failed in code cell 2 ('1 / 0')" in out.stderr and "ZeroDivisionError" in out.stderr

@@ -1,0 +1,52 @@
+"""The within-subjects design of section 5.2.4, checked by brute-force counting."""
+
+from itertools import permutations
+
+import numpy as np
+import pytest
+
+from mutual.study_design import TREATMENTS, balanced_latin_square, design_balance, study_design
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 5, 6])
+def test_balanced_latin_square(n):
+    sq = balanced_latin_square(n)
+    assert sq.shape == ((n if n % 2 == 0 else 2 * n), n)
+    for row in sq:
+        assert sorted(row) == list(range(n))
+    for col in sq.T:  # each condition equally often in each position
+        assert len(set(np.bincount(col, minlength=n))) == 1
+    follows = np.zeros((n, n), int)
+    for row in sq:
+        for a, b in zip(row[:-1], row[1:]):
+            follows[a, b] += 1
+    off = follows[~np.eye(n, dtype=bool)]
+    assert len(set(off)) == 1  # each ordered pair of neighbours equally often
+
+
+def test_twelve_participants_are_fully_balanced():
+    d = study_design(12, seed=5)
+    bal = design_balance(d)
+    assert bal["all_pairs"] and bal["no_treatment_first_twice"] and bal["distinct_versions"]
+    assert (bal["version_counts"].to_numpy() == 4).all()
+    assert (bal["position_counts"].to_numpy() == 4).all()
+    # every participant's six trials: each treatment twice, trials 1..6
+    for _, g in d.groupby("participant"):
+        assert sorted(g["trial"]) == list(range(1, 7))
+        assert (g["treatment"].value_counts() == 2).all()
+    # the twelve schedules (order of treatments over the six trials) are all different
+    schedules = {tuple(g["treatment"]) for _, g in d.groupby("participant")}
+    assert len(schedules) == 12
+    # and each is a sequence of the three pairs, each oriented with distinct first treatments
+    for sched in schedules:
+        firsts = sched[0::2]
+        assert sorted(firsts) == sorted(TREATMENTS)
+        assert sorted(tuple(sorted(p)) for p in zip(sched[0::2], sched[1::2])) == sorted(
+            tuple(sorted(p)) for p in permutations(TREATMENTS, 2) if p[0] < p[1])
+
+
+def test_bad_design_arguments():
+    with pytest.raises(ValueError, match="n_participants"):
+        study_design(0)
+    with pytest.raises(ValueError, match="positive integer"):
+        balanced_latin_square(0)
