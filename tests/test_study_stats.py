@@ -177,6 +177,6 @@ def test_bad_study_data_raises(questionnaire, corrupt, message):
 
 def test_missing_cell_in_study_data_raises(questionnaire):
     trust = questionnaire[questionnaire["measure"] == "trust"]
-    gone = trust[~((trust["participant"] == 2) & (trust["treatment"] == "Learned"))]
+    gone = trust[~((trust["participant"] == "P02") & (trust["treatment"] == "Learned"))]
     with pytest.raises(ValueError, match="unbalanced"):
         rm_anova(gone, "value", "participant", "treatment", aggregate="mean")

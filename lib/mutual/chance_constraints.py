@@ -26,30 +26,25 @@ def chance_forbidden(mdp, states, psi):
     """For K state chance constraints (x_bar_k, psi_k): the (X, A, K) boolean array
     of actions they forbid, [S(x, a, x_bar_k) > psi_k] (eq. 3.1)."""
     states = np.atleast_1d(np.asarray(states))
-    psi = np.broadcast_to(np.asarray(psi, dtype=float), states.shape)
+    psi = np.asarray(psi, dtype=float)
+    if psi.ndim > 1 or psi.size not in (1, states.size):
+        raise ValueError(f"psi: needs one threshold or one per state ({states.size}), got shape {psi.shape}")
+    psi = np.broadcast_to(psi.ravel(), states.shape)
     if states.ndim != 1 or (states.size and (not np.issubdtype(states.dtype, np.integer)
                                              or states.min() < 0 or states.max() >= mdp.n_states)):
         raise ValueError(f"states: must be a 1-D array of state indices in 0..{mdp.n_states - 1}")
     if np.any(np.isnan(psi)) or np.any(psi < 0) or np.any(psi > 1):
         raise ValueError("psi: risk thresholds must lie in [0, 1]")
-    column_of = np.full(mdp.n_states, -1)
     forbidden = np.zeros((mdp.n_states * mdp.n_actions, states.size), dtype=bool)
     row, col, val = _nonzeros(mdp)
-    # a state may carry several constraints: handle each duplicate layer in turn
+    # join each non-zero S(x, a, x') with every constraint k on x' (a state may carry several)
     order = np.argsort(states, kind="stable")
-    first = np.ones(states.size, dtype=bool)
-    first[1:] = states[order][1:] != states[order][:-1]
-    remaining = order
-    while remaining.size:
-        layer = remaining[first[np.searchsorted(order, remaining)] if remaining is order else
-                          np.unique(states[remaining], return_index=True)[1]]
-        column_of[:] = -1
-        column_of[states[layer]] = layer
-        k = column_of[col]
-        hit = (k >= 0) & (val > psi[np.maximum(k, 0)])
-        forbidden[row[hit], k[hit]] = True
-        remaining = np.setdiff1d(remaining, layer, assume_unique=True)
-        remaining = remaining[np.argsort(states[remaining], kind="stable")]
+    lo = np.searchsorted(states[order], col, side="left")
+    count = np.searchsorted(states[order], col, side="right") - lo
+    entry = np.repeat(np.arange(col.size), count)
+    k = order[np.repeat(lo, count) + np.arange(entry.size) - np.repeat(np.cumsum(count) - count, count)]
+    hit = val[entry] > psi[k]
+    forbidden[row[entry[hit]], k[hit]] = True
     return forbidden.reshape(mdp.n_states, mdp.n_actions, states.size)
 
 

@@ -97,6 +97,14 @@ def avoid_value_closed_form(states, w_max, radius, speed=SPEED, tol=1e-9):
     return np.where(approaching, np.maximum(*turning), np.linalg.norm(p, axis=1)) - radius
 
 
+def rotate_to_heading(states, heading=0.0):
+    """Rotate states about the obstacle centre so each faces ``heading``; V is invariant (a disk is round)."""
+    s = check_states(states)
+    turn = heading - s[:, 2]
+    c, sn = np.cos(turn), np.sin(turn)
+    return np.stack([c * s[:, 0] - sn * s[:, 1], sn * s[:, 0] + c * s[:, 1], np.full(len(s), float(heading))], 1)
+
+
 def dubins_step(states, controls, dt, speed=SPEED):
     """Integrate eq. (5.1) exactly over ``dt`` with constant turn rates ``controls`` (vectorised over cars)."""
     s = check_states(states)

@@ -11,10 +11,12 @@ jit-compiled once per set of callables (``params`` is traced, so a family of
 problems shares one compilation). All arithmetic is float64.
 
 Each iteration linearises the dynamics and takes a second-order model of the cost
-along the current trajectory (Gauss-Newton: the dynamics' curvature is dropped),
+along the current trajectory (Gauss-Newton: the dynamics' curvature is dropped;
+``second_order=True`` keeps it, which is full DDP as in Tassa et al. and converges
+faster when the cost-to-go gradient is large, e.g. for a goal just out of reach),
 runs the Riccati-like backward pass for an affine policy ``du = k + K dx``, and
-rolls the policy out with a backtracking line search over step sizes (all sizes
-evaluated at once, the first to pass the Armijo test is taken). Objectives need
+rolls the policy out with a backtracking line search (step sizes 1, 1/2, ..., 1/1024
+until the Armijo test passes, inside one compiled loop). Objectives need
 not be convex, e.g. the legible ``(1 + alpha) J1 - J0`` of eq. (6.15): the
 control block ``Q_uu`` of the model is regularised to ``Q_uu + mu I`` with the
 schedule of Tassa, Erez & Todorov (2012) whenever it is not positive definite.
@@ -25,7 +27,7 @@ blowing up, no convergence), instead of returning a meaningless trajectory.
 """
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, wraps
 
 import jax
 import jax.numpy as jnp
@@ -60,11 +62,12 @@ class ILQRResult:
 
 
 def _x64(fn):
-    """Run ``fn`` (and everything it traces or compiles) with 64-bit JAX types."""
+    """Run ``fn`` (and everything it traces or compiles) with 64-bit JAX types, leaving the
+    global JAX setting of other modules alone."""
+    @wraps(fn)
     def wrapped(*args, **kwargs):
         with jax.enable_x64(True):
             return fn(*args, **kwargs)
-    wrapped.__name__, wrapped.__doc__ = fn.__name__, fn.__doc__
     return wrapped
 
 
@@ -83,36 +86,45 @@ def _kernels(dynamics, running_cost, terminal_cost):
         running = jax.vmap(running_cost, in_axes=(0, 0, None))(xs[:-1], us, params)
         return jnp.sum(running) + terminal_cost(xs[-1], params)
 
+    STEP_SIZES_J = jnp.asarray(STEP_SIZES)
+
     def shooting_cost(us, x0, params):
         return total_cost(rollout(x0, us, params), us, params)
 
-    def quadratic_model(xs, us, params):
+    def quadratic_model(xs, us, params, second_order):
+        """Per-stage derivatives; ``second_order`` adds the dynamics' curvature (DDP)."""
         x, u = xs[:-1], us
-        fx = jax.vmap(jax.jacfwd(dynamics, 0), in_axes=(0, 0, None))(x, u, params)
-        fu = jax.vmap(jax.jacfwd(dynamics, 1), in_axes=(0, 0, None))(x, u, params)
-        lx = jax.vmap(jax.grad(running_cost, 0), in_axes=(0, 0, None))(x, u, params)
-        lu = jax.vmap(jax.grad(running_cost, 1), in_axes=(0, 0, None))(x, u, params)
-        hess = jax.vmap(jax.hessian(running_cost, (0, 1)), in_axes=(0, 0, None))(x, u, params)
-        (lxx, lxu), (lux, luu) = hess
-        del lxu
+        batch = dict(in_axes=(0, 0, None))
+        fx = jax.vmap(jax.jacfwd(dynamics, 0), **batch)(x, u, params)
+        fu = jax.vmap(jax.jacfwd(dynamics, 1), **batch)(x, u, params)
+        lx = jax.vmap(jax.grad(running_cost, 0), **batch)(x, u, params)
+        lu = jax.vmap(jax.grad(running_cost, 1), **batch)(x, u, params)
+        (lxx, _), (lux, luu) = jax.vmap(jax.hessian(running_cost, (0, 1)), **batch)(x, u, params)
+        curvature = (jax.vmap(jax.hessian(dynamics, (0, 1)), **batch)(x, u, params) if second_order
+                     else ((None, None), (None, None)))
+        (fxx, _), (fux, fuu) = curvature
         Vx = jax.grad(terminal_cost)(xs[-1], params)
         Vxx = jax.hessian(terminal_cost)(xs[-1], params)
-        return (fx, fu, lx, lu, lxx, lux, luu), (Vx, Vxx)
+        return (fx, fu, lx, lu, lxx, lux, luu, fxx, fux, fuu), (Vx, Vxx)
 
-    def backward(model, terminal, mu):
-        """Backward pass; returns gains, predicted decrease terms and whether every Q_uu + mu I was PD."""
+    def backward(model, terminal, mu, second_order, shift=0.0):
+        """Backward pass: gains, predicted decrease terms, the largest gradient entry, and whether
+        every ``Q_uu + (mu + shift (1 + max|Q_uu|)) I`` was positive definite."""
         m = model[1].shape[-1]
 
         def step(carry, stage):
             Vx, Vxx, lam = carry
-            fx, fu, lx, lu, lxx, lux, luu = stage
+            fx, fu, lx, lu, lxx, lux, luu, fxx, fux, fuu = stage
             grad = lu + fu.T @ lam  # exact gradient dJ/du_k by the adjoint recursion
             Qx = lx + fx.T @ Vx
             Qu = lu + fu.T @ Vx
             Qxx = lxx + fx.T @ Vxx @ fx
             Quu = luu + fu.T @ Vxx @ fu
             Qux = lux + fu.T @ Vxx @ fx
-            chol = jnp.linalg.cholesky(0.5 * (Quu + Quu.T) + mu * jnp.eye(m))
+            if second_order:
+                Qxx, Quu, Qux = (Q + jnp.tensordot(Vx, f, 1) for Q, f in ((Qxx, fxx), (Quu, fuu), (Qux, fux)))
+            Quu = 0.5 * (Quu + Quu.T)
+            chol = jnp.linalg.cholesky(Quu + (mu + shift * (1.0 + jnp.max(jnp.abs(Quu)))) * jnp.eye(m))
             ok = jnp.all(jnp.isfinite(chol))
             k = -cho_solve((chol, True), Qu)
             K = -cho_solve((chol, True), Qux)
@@ -126,7 +138,7 @@ def _kernels(dynamics, running_cost, terminal_cost):
         return k, K, jnp.sum(d1), jnp.sum(d2), jnp.all(ok), jnp.max(jnp.abs(grad))
 
     def line_search(x0, xs, us, cost, k, K, d1, d2, params):
-        """Roll out ``u + a k + K dx`` for every step size ``a``; keep the largest that passes Armijo."""
+        """Backtracking: roll out ``u + a k + K dx`` for ``a = 1, 1/2, ...`` until the Armijo test passes."""
         def trial(a):
             def step(x, stage):
                 x_ref, u_ref, kk, KK = stage
@@ -135,27 +147,56 @@ def _kernels(dynamics, running_cost, terminal_cost):
                 return x_next, (x_next, u)
             _, (x_new, u_new) = jax.lax.scan(step, x0, (xs[:-1], us, k, K))
             x_new = jnp.concatenate([x0[None], x_new])
-            return x_new, u_new, total_cost(x_new, u_new, params)
+            c_new = total_cost(x_new, u_new, params)
+            accept = jnp.isfinite(c_new) & (cost - c_new >= -ARMIJO * (a * d1 + a ** 2 * d2))
+            return x_new, u_new, c_new, accept
 
-        steps = jnp.asarray(STEP_SIZES)
-        x_all, u_all, c_all = jax.vmap(trial)(steps)
-        predicted = -(steps * d1 + steps ** 2 * d2)
-        accept = jnp.isfinite(c_all) & (cost - c_all >= ARMIJO * predicted)
-        best = jnp.argmax(accept)
-        return x_all[best], u_all[best], c_all[best], jnp.any(accept), steps[best]
+        def body(state):
+            i, *_ = state
+            return (i + 1, *trial(STEP_SIZES_J[i]))
 
-    def iterate(x0, xs, us, cost, params, mu):
-        model, terminal = quadratic_model(xs, us, params)
-        k, K, d1, d2, ok, grad = backward(model, terminal, mu)
-        x_new, u_new, c_new, accepted, _ = line_search(x0, xs, us, cost, k, K, d1, d2, params)
-        return x_new, u_new, c_new, accepted & ok, ok, K, grad
+        def keep_going(state):
+            i, _, _, _, accept = state
+            return (~accept) & (i < len(STEP_SIZES))
+
+        first = (1, *trial(STEP_SIZES_J[0]))
+        _, x_new, u_new, c_new, accept = jax.lax.while_loop(keep_going, body, first)
+        return x_new, u_new, c_new, accept
+
+    def iterate(x0, xs, us, cost, params, mu, second_order):
+        """One iteration; the scalars come back together in one array (one host transfer)."""
+        model, terminal = quadratic_model(xs, us, params, second_order)
+        k, K, d1, d2, ok, grad = backward(model, terminal, mu, second_order)
+        x_new, u_new, c_new, accepted = line_search(x0, xs, us, cost, k, K, d1, d2, params)
+        size = jnp.maximum(jnp.max(jnp.abs(x_new)), jnp.max(jnp.abs(u_new)))
+        return x_new, u_new, K, jnp.stack([c_new, accepted & ok, ok, grad, size])
+
+    def is_minimum(xs, us, params):
+        """Whether the exact (DDP) ``Q_uu`` are all positive definite up to a relative 1e-8:
+        the block factorisation of the Hessian of the cost in the controls, so True at a strict
+        local minimum and False at a saddle or maximum."""
+        return backward(*quadratic_model(xs, us, params, True), 0.0, True, shift=1e-8)[4]
 
     return (jax.jit(rollout), jax.jit(total_cost), jax.jit(jax.value_and_grad(shooting_cost)),
-            jax.jit(iterate))
+            jax.jit(iterate, static_argnames="second_order"), jax.jit(is_minimum))
+
+
+@lru_cache(maxsize=256)
+def _check_outputs(dynamics, running_cost, terminal_cost, n, m, treedef, specs):
+    """Abstractly evaluate the callables once per problem signature and check their output shapes."""
+    x, u = jax.ShapeDtypeStruct((n,), jnp.float64), jax.ShapeDtypeStruct((m,), jnp.float64)
+    params = jax.tree_util.tree_unflatten(treedef, [jax.ShapeDtypeStruct(shape, dtype) for shape, dtype in specs])
+    out = jax.eval_shape(dynamics, x, u, params).shape
+    if out != (n,):
+        raise ValueError(f"dynamics must map a state of shape {(n,)} to the same shape, got {out}")
+    for name, shape in (("running_cost", jax.eval_shape(running_cost, x, u, params).shape),
+                        ("terminal_cost", jax.eval_shape(terminal_cost, x, params).shape)):
+        if shape != ():
+            raise ValueError(f"{name} must return a scalar, got shape {shape}")
 
 
 def _check_problem(dynamics, running_cost, terminal_cost, x0, us, params):
-    """Validate shapes and outputs of the callables up front (abstract evaluation only)."""
+    """Validate the inputs and the callables' output shapes up front; return x0, us, params as JAX arrays."""
     for name, fn in (("dynamics", dynamics), ("running_cost", running_cost), ("terminal_cost", terminal_cost)):
         if not callable(fn):
             raise ValueError(f"{name} must be callable, got {type(fn).__name__}")
@@ -167,22 +208,17 @@ def _check_problem(dynamics, running_cost, terminal_cost, x0, us, params):
         raise ValueError(f"us must have shape (N, m) with N >= 1, got {us.shape}")
     if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(us))):
         raise ValueError("x0 and us must be finite")
-    x_spec = jax.ShapeDtypeStruct(x0.shape, jnp.float64)
-    u_spec = jax.ShapeDtypeStruct(us.shape[1:], jnp.float64)
-    out = jax.eval_shape(lambda x, u: dynamics(x, u, params), x_spec, u_spec)
-    if out.shape != x0.shape:
-        raise ValueError(f"dynamics must map a state of shape {x0.shape} to the same shape, got {out.shape}")
-    for name, shape in (("running_cost", jax.eval_shape(lambda x, u: running_cost(x, u, params), x_spec, u_spec).shape),
-                        ("terminal_cost", jax.eval_shape(lambda x: terminal_cost(x, params), x_spec).shape)):
-        if shape != ():
-            raise ValueError(f"{name} must return a scalar, got shape {shape}")
-    return jnp.asarray(x0), jnp.asarray(us)
+    leaves, treedef = jax.tree_util.tree_flatten(params)
+    specs = tuple((np.shape(leaf), np.result_type(leaf).name) for leaf in leaves)
+    _check_outputs(dynamics, running_cost, terminal_cost, x0.shape[0], us.shape[1], treedef, specs)
+    # on the device once, so that the iterations do not convert them again at every call
+    return jnp.asarray(x0), jnp.asarray(us), jax.tree_util.tree_map(jnp.asarray, params)
 
 
 @_x64
 def rollout(dynamics, x0, us, params=None):
     """States ``x_0..x_N`` (N+1, n) reached from ``x0`` under the controls ``us`` (N, m)."""
-    x0, us = _check_problem(dynamics, _no_cost, _no_terminal_cost, x0, us, params)
+    x0, us, params = _check_problem(dynamics, _no_cost, _no_terminal_cost, x0, us, params)
     return np.asarray(_kernels(dynamics, _no_cost, _no_terminal_cost)[0](x0, us, params))
 
 
@@ -197,7 +233,7 @@ def _no_terminal_cost(x, params):
 @_x64
 def trajectory_cost(dynamics, running_cost, terminal_cost, x0, us, params=None):
     """The single-shooting objective ``H_J(u)`` of eq. (6.6): the total cost of the rollout of ``us``."""
-    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
+    x0, us, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
     value, _ = _kernels(dynamics, running_cost, terminal_cost)[2](us, x0, params)
     return float(value)
 
@@ -205,7 +241,7 @@ def trajectory_cost(dynamics, running_cost, terminal_cost, x0, us, params=None):
 @_x64
 def trajectory_cost_grad(dynamics, running_cost, terminal_cost, x0, us, params=None):
     """``(H_J(u), dH_J/du)``: the single-shooting objective and its autodiff gradient (N, m)."""
-    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
+    x0, us, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
     value, grad = _kernels(dynamics, running_cost, terminal_cost)[2](us, x0, params)
     return float(value), np.asarray(grad)
 
@@ -220,7 +256,7 @@ def solve_single_shooting(dynamics, running_cost, terminal_cost, x0, us0, params
     """
     from scipy.optimize import minimize
 
-    x0, us0 = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
+    x0, us0, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
     value_and_grad = _kernels(dynamics, running_cost, terminal_cost)[2]
     shape = us0.shape
 
@@ -233,18 +269,32 @@ def solve_single_shooting(dynamics, running_cost, terminal_cost, x0, us0, params
     return res.x.reshape(shape), float(res.fun), res
 
 
+def _local_minimum(is_minimum, xs, us, K, costs, mu, params):
+    """The result at a stationary point, after checking that it is a minimum, not a saddle or a maximum."""
+    if not bool(is_minimum(xs, us, params)):
+        raise ILQRError(f"iLQR stopped at a stationary point (cost {costs[-1]:.6g}) that is not a local minimum: "
+                        "the exact Hessian of the cost in the controls is not positive definite; "
+                        "the objective may be unbounded below, or a symmetric start sits on a saddle "
+                        "(start from a perturbed guess)")
+    return ILQRResult(xs=np.asarray(xs), us=np.asarray(us), K=np.asarray(K), cost=costs[-1],
+                      iterations=len(costs) - 1, costs=np.asarray(costs), reg=mu)
+
+
 @_x64
 def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=200, grad_tol=1e-9,
-         stall_tol=1e-14, reg_max=1e10, divergence_bound=1e6):
-    """Minimise the total cost from ``x0`` by iLQR, starting from the controls ``us0`` (N, m).
+         stall_tol=1e-12, reg_max=1e10, divergence_bound=1e6, second_order=False):
+    """Minimise the total cost from ``x0`` by iLQR, starting from the controls ``us0`` (N, m);
+    return an :class:`ILQRResult`.
 
-    Converged when every ``Q_uu + mu I`` is positive definite and the exact gradient
-    ``dJ/du`` (adjoint recursion) is at most ``grad_tol * (1 + |cost|)`` in every
-    entry, or when an accepted step improves the cost by less than
-    ``stall_tol * (1 + |cost|)`` (rounding level). Raises :class:`ILQRError` when the
-    regularisation needed exceeds ``reg_max``, when states, controls or the cost
-    exceed ``divergence_bound`` in size or become non-finite, or after ``max_iter``
-    iterations without convergence.
+    ``params`` (any pytree) is passed to the three callables. Converged when the exact
+    gradient ``dJ/du`` (adjoint recursion) is at most ``grad_tol * (1 + |cost|)`` in every
+    entry, or when an accepted step improves the cost by less than ``stall_tol * (1 + |cost|)``
+    (rounding level) with the gradient within 1000 times that bound; the point must then
+    be a local minimum (the exact Hessian in the controls positive definite), not a
+    saddle. Raises :class:`ILQRError` when it is not, when the regularisation needed
+    exceeds ``reg_max``, when states, controls or the cost exceed ``divergence_bound`` in
+    size or become non-finite, or after ``max_iter`` backward passes without convergence.
+    ``second_order=True`` runs full DDP instead (see the module docstring).
     """
     if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
         raise ValueError(f"max_iter must be a positive integer, got {max_iter!r}")
@@ -252,8 +302,8 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
                         ("divergence_bound", divergence_bound)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
-    roll, cost_of, _, iterate = _kernels(dynamics, running_cost, terminal_cost)
+    x0, us, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
+    roll, cost_of, _, iterate, is_minimum = _kernels(dynamics, running_cost, terminal_cost)
     xs = roll(x0, us, params)
     cost = float(cost_of(xs, us, params))
     if not np.isfinite(cost):
@@ -263,36 +313,31 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     mu_min, delta0 = 1e-6, 2.0
     costs = [cost]
     for _ in range(max_iter):
-        x_new, u_new, c_new, accepted, pd, K, grad = iterate(x0, xs, us, cost, params, mu)
-        grad = float(grad)
-
-        def result():
-            return ILQRResult(xs=np.asarray(xs), us=np.asarray(us), K=np.asarray(K), cost=cost,
-                              iterations=len(costs) - 1, costs=np.asarray(costs), reg=mu)
-
-        if bool(pd) and grad <= grad_tol * (1 + abs(cost)):
-            return result()
-        if not bool(accepted):  # Q_uu not positive definite, or no step size decreased the cost
+        x_new, u_new, K, scalars = iterate(x0, xs, us, cost, params, mu, second_order=bool(second_order))
+        c_new, accepted, pd, grad, size = np.asarray(scalars).tolist()
+        if pd and grad <= grad_tol * (1 + abs(cost)):
+            return _local_minimum(is_minimum, xs, us, K, costs, mu, params)
+        if not accepted:  # Q_uu not positive definite, or no step size decreased the cost
             delta = max(delta0, delta * delta0)
             mu = max(mu_min, mu * delta)
             if mu > reg_max:
-                why = ("the control Hessian Q_uu stayed indefinite" if not bool(pd)
+                why = ("the control Hessian Q_uu stayed indefinite" if not pd
                        else "no step along the regularised direction decreased the cost")
                 raise ILQRError(f"iLQR failed: {why} up to regularisation mu = {reg_max:g} (cost {cost:.6g}, "
                                 f"largest gradient entry {grad:.3g} after {len(costs) - 1} steps); "
                                 "the objective is probably unbounded below or not smooth")
             continue
-        improvement = cost - float(c_new)
-        xs, us, cost = x_new, u_new, float(c_new)
+        improvement = cost - c_new
+        xs, us, cost = x_new, u_new, c_new
         costs.append(cost)
-        size = max(float(jnp.max(jnp.abs(xs))), float(jnp.max(jnp.abs(us))), abs(cost))
+        size = max(size, abs(cost))
         if not np.isfinite(size) or size > divergence_bound:
             raise ILQRError(f"iLQR diverged: after {len(costs) - 1} steps the cost is {cost:.6g} and the largest "
                             f"|state|, |control| or |cost| is {size:.3g} > divergence_bound = {divergence_bound:g}; "
                             "the objective is unbounded below (for a legible objective (1 + alpha) J1 - J0, "
                             "increase alpha or shorten the horizon)")
-        if improvement <= stall_tol * (1 + abs(cost)):
-            return result()
+        if improvement <= stall_tol * (1 + abs(cost)) and grad <= 1e3 * grad_tol * (1 + abs(cost)):
+            return _local_minimum(is_minimum, xs, us, K, costs, mu, params)
         delta = min(1 / delta0, delta / delta0)
         mu = mu * delta if mu * delta > mu_min else 0.0
     raise ILQRError(f"iLQR did not converge in {max_iter} iterations (cost {cost:.6g}, still falling by "

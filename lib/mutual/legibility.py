@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import cvxpy as cp
 import numpy as np
 
-from .lqr import solve_lq
+from .lqr import riccati_backward, solve_lq
 
 
 @dataclass(frozen=True)
@@ -191,24 +191,43 @@ def linear_alpha_schedule(alpha_start, alpha_end):
 def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
     """Anticipative legible control by receding horizon (eq. (6.16)).
 
-    Replans at steps ``0, every, 2 every, ...`` on the remaining horizon with
-    ``alpha = alpha_of_s(t_i / N)`` and follows each plan until the next
-    replanning. Returns ``(xs, us, alphas)`` with ``alphas[k]`` the weight in
-    force at step ``k``.
+    Replans at steps ``t_i = 0, every, 2 every, ...`` on the remaining horizon
+    ``[t_i, N)`` with ``alpha_i = alpha_of_s(t_i / N)`` and follows each plan until the
+    next replanning. The replans' backward Riccati passes share the dynamics and
+    differ only in ``alpha``, so they run together in one batched sweep
+    (:func:`mutual.lqr.riccati_backward`); the closed loop then applies plan ``i``'s
+    feedback on its own steps, which reproduces its open-loop controls exactly.
+    Returns ``(xs, us, alphas)`` with ``alphas[k]`` the weight in force at step ``k``.
     """
     if not isinstance(every, (int, np.integer)) or every < 1:
         raise ValueError(f"every must be a positive integer, got {every!r}")
-    x0 = np.asarray(x0, float)
-    xs, us, alphas = [x0], [], []
-    for start in range(0, N, every):
-        alpha = float(alpha_of_s(start / N))
-        plan = legible_trajectory(dynamics.stages(start, N - start), J1.stages(start, N - start),
-                                  J0.stages(start, N - start), xs[-1], N - start, alpha)
-        steps = min(every, N - start)
-        us.extend(plan.us[:steps])
-        xs.extend(plan.xs[1:steps + 1])
-        alphas.extend([alpha] * steps)
-    return np.array(xs), np.array(us), np.array(alphas)
+    if not isinstance(N, (int, np.integer)) or N < 1:
+        raise ValueError(f"N must be a positive integer, got {N!r}")
+    starts = np.arange(0, N, every)
+    alphas = np.array([float(alpha_of_s(t / N)) for t in starts])
+    if not np.all(np.isfinite(alphas)):
+        raise ValueError(f"alpha_of_s returned non-finite weights {alphas.tolist()}")
+    dyn, c1, c0 = dynamics.stages(0, N), J1.stages(0, N), J0.stages(0, N)
+    n, m = dyn.n, dyn.m
+    w = (1.0 + alphas)[:, None, None]
+
+    def mix(f, shape):          # per replan: (1 + alpha_i) J1 - J0, field f
+        one = np.broadcast_to(getattr(c1, f), shape)
+        zero = np.broadcast_to(getattr(c0, f), shape)
+        return w.reshape(-1, *([1] * len(shape))) * one - zero
+
+    A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
+    K, k, _, _ = riccati_backward(A, B, mix("Q", (N, n, n)), mix("R", (N, m, m)), mix("q", (N, n)),
+                                  mix("r", (N, m)), mix("QN", (n, n)), mix("qN", (n,)), starts=starts)
+    plan = np.arange(N) // every            # which replan is in force at each step
+    Ks, ks = K[plan, np.arange(N)], k[plan, np.arange(N)]
+    xs = np.empty((N + 1, n))
+    us = np.empty((N, m))
+    x = xs[0] = np.asarray(x0, float)
+    for t in range(N):
+        u = us[t] = Ks[t] @ x + ks[t]
+        x = xs[t + 1] = A[t] @ x + B[t] @ u
+    return xs, us, alphas[plan]
 
 
 # ---- the Boltzmann observer in closed form --------------------------------------------------
@@ -269,7 +288,7 @@ def log_boltzmann(dynamics, cost, x0, us):
     us = np.asarray(us, float)
     N = us.shape[0]
     H, h, c = lifted_cost(dynamics, cost, x0, N)
-    mean, L, log_z = _gaussian(H, h, c, "cost")
+    _, _, log_z = _gaussian(H, h, c, "cost")
     u = us.reshape(-1)
     J = 0.5 * u @ H @ u + h @ u + c
     return float(-J - log_z)
@@ -312,9 +331,14 @@ def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL
     raised. Returns ``(xs, us, duals)``; ``duals[i]`` is the multiplier of constraint i,
     so the solution minimises ``(1 + sum duals) J1 - sum duals_i J0_i`` (the Lagrangian).
     """
-    etas = np.broadcast_to(np.asarray(etas, float), (len(distractors),))
     if not len(distractors):
         raise ValueError("distractors must list at least one hypothesis cost")
+    try:
+        etas = np.broadcast_to(np.asarray(etas, float), (len(distractors),))
+    except ValueError:
+        raise ValueError(f"etas must be a number or one per distractor ({len(distractors)}), got {etas!r}") from None
+    if not np.all(np.isfinite(etas)):
+        raise ValueError(f"etas must be finite, got {etas.tolist()}")
     H1, h1, c1 = lifted_cost(dynamics, J1, x0, N)
     u = cp.Variable(H1.shape[0])
     cons = []
@@ -356,3 +380,57 @@ def receding_horizon_qp(dynamics, J1, distractors, x0, N, eta_of_s, every=10, so
         us.extend(plan_u[:steps])
         xs.extend(plan_x[1:steps + 1])
     return np.array(xs), np.array(us)
+
+
+# ---- helpers for the chapter's experiments ---------------------------------------------------
+
+def batch_costs(dynamics, cost, x0, us):
+    """``J(u)`` for a batch of control sequences ``us`` (B, N, m), through the lifted form."""
+    us = np.asarray(us, float)
+    H, h, c = lifted_cost(dynamics, cost, x0, us.shape[1])
+    U = us.reshape(len(us), -1)
+    return 0.5 * np.einsum("bi,ij,bj->b", U, H, U) + U @ h + c
+
+
+def sample_boltzmann(dynamics, cost, x0, N, size, rng):
+    """Draw ``size`` control sequences (size, N, m) from ``P(u | H) = exp(-J(u)) / Z`` (eq. (6.8))."""
+    H, h, c = lifted_cost(dynamics, cost, x0, N)
+    mean, L, _ = _gaussian(H, h, c, "cost")
+    z = rng.standard_normal((size, len(mean)))
+    # u = mean + L^{-T} z has covariance (L L')^{-1} = H^{-1}
+    u = mean + np.linalg.solve(L.T, z.T).T
+    return u.reshape(size, N, -1)
+
+
+def random_lq_hypotheses(rng, n=2, m=2, N=10):
+    """Random dynamics and hypotheses ``J0``, ``J1`` with ``J1 - J0`` strictly convex (so that
+    ``Lambda`` has a unique minimiser); returns ``(dynamics, J0, J1, x0)``."""
+    def cost(effort):
+        L, Lr, LN = rng.normal(size=(N, n, n)), rng.normal(size=(N, m, m)), rng.normal(size=(n, n))
+        return QuadraticCost(Q=L @ L.transpose(0, 2, 1) / n, q=rng.normal(size=(N, n)),
+                             R=Lr @ Lr.transpose(0, 2, 1) / m + effort * np.eye(m), r=rng.normal(size=(N, m)),
+                             QN=LN @ LN.T, qN=rng.normal(size=n), const=rng.normal())
+    dyn = LinearDynamics(np.eye(n) + 0.2 * rng.normal(size=(n, n)), rng.normal(size=(n, m)))
+    J0 = cost(1.0)
+    return dyn, J0, J0 + cost(0.5), rng.normal(size=n)
+
+
+def time_to_reach(xs, level, dt, axis=0):
+    """First time at which coordinate ``axis`` of the trajectory ``xs`` reaches ``level``
+    (linear interpolation between knots); ``inf`` if it never does."""
+    x = np.asarray(xs, float)[:, axis] - level
+    side = np.sign(x[0])
+    if side == 0:
+        return 0.0
+    crossed = np.nonzero(side * x <= 0)[0]
+    if crossed.size == 0:
+        return np.inf
+    k = crossed[0]
+    return float((k - 1 + x[k - 1] / (x[k - 1] - x[k])) * dt)
+
+
+def lateral_share(xs, start, stop, axis=0):
+    """Fraction of the path length between knots ``start`` and ``stop`` that is lateral
+    (along coordinate ``axis``): 1 for sideways motion, 0 for motion straight ahead."""
+    steps = np.diff(np.asarray(xs, float), axis=0)[start:stop]
+    return float(np.abs(steps[:, axis]).sum() / np.linalg.norm(steps, axis=1).sum())

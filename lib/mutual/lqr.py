@@ -11,7 +11,9 @@ or per stage (time-varying, ``A`` of shape (N, n, n)). ``Q_k`` need not be
 positive semidefinite (legible objectives subtract costs, eq. (6.15)): the
 problem is bounded below with a unique minimiser exactly when every
 ``Q_uu,k = R_k + B_k'V_{k+1}B_k`` of the backward pass is positive definite,
-and :func:`solve_lq` raises a ValueError naming the first stage where it is not.
+and :func:`solve_lq` raises a ValueError naming a stage where it is not.
+:func:`riccati_backward` runs the backward passes of many problems that share the
+dynamics at once (receding-horizon replanning, eq. (6.16)).
 """
 
 from dataclasses import dataclass
@@ -61,6 +63,75 @@ def _is_finite(name, a):
     return a
 
 
+_UNBOUNDED = ("the cost has no unique finite minimiser (for a legible objective (1+alpha) J1 - J0 "
+              "with x' = u this means alpha <= 0)")
+
+
+def riccati_backward(A, B, Q, R, q, r, QN, qN, M=None, c=None, starts=None):
+    """Backward Riccati passes of ``P`` LQ problems sharing the dynamics, all at once.
+
+    ``A`` (N, n, n), ``B`` (N, n, m), ``c`` (N, n) are shared; the costs carry a
+    leading problem axis: ``Q`` (P, N, n, n), ``R`` (P, N, m, m), ``q`` (P, N, n),
+    ``r`` (P, N, m), ``M`` (P, N, n, m), ``QN`` (P, n, n), ``qN`` (P, n). Problem ``p``
+    starts at stage ``starts[p]`` (non-decreasing; default 0): its earlier stages are
+    skipped, as when replanning on a shrinking horizon (eq. (6.16)). Returns the gains
+    ``K`` (P, N, m, n), ``k`` (P, N, m) and cost-to-go ``V`` (P, N+1, n, n), ``v`` (P, N+1, n)
+    (zero before each problem's start). Raises ValueError if a problem is unbounded.
+    """
+    P, N = Q.shape[:2]
+    n, m = B.shape[1:]
+    starts = np.zeros(P, dtype=int) if starts is None else np.asarray(starts)
+    if starts.shape != (P,) or np.any(np.diff(starts) < 0) or starts.min() < 0 or starts.max() >= N:
+        raise ValueError(f"starts must be {P} non-decreasing stage indices in [0, {N}), got {starts!r}")
+    M = np.zeros((P, N, n, m)) if M is None else M
+    c = np.zeros((N, n)) if c is None else c
+    AT, BT = A.transpose(0, 2, 1), B.transpose(0, 2, 1)
+    MT = M.transpose(0, 1, 3, 2)
+    active = np.searchsorted(starts, np.arange(N), side="right")   # problems already started at stage k
+    K, kff = np.zeros((P, N, m, n)), np.zeros((P, N, m))
+    V, v = np.zeros((P, N + 1, n, n)), np.zeros((P, N + 1, n))
+    Quu = np.tile(np.eye(m), (P, N, 1, 1))
+    V[:, N] = 0.5 * (QN + QN.transpose(0, 2, 1))
+    v[:, N] = qN
+    for t in range(N - 1, -1, -1):
+        a = active[t]
+        Vn, vn = V[:a, t + 1], v[:a, t + 1, :, None]
+        VA, VB = Vn @ A[t], Vn @ B[t]
+        vc = vn + Vn @ c[t, :, None]
+        Quu[:a, t] = R[:a, t] + BT[t] @ VB
+        Qux = MT[:a, t] + BT[t] @ VA
+        try:
+            inv = np.linalg.inv(Quu[:a, t])
+        except np.linalg.LinAlgError:
+            raise ValueError(f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} is singular; "
+                             + _UNBOUNDED) from None
+        Kt = K[:a, t] = -inv @ Qux
+        kt = -inv @ (r[:a, t, :, None] + BT[t] @ vc)
+        kff[:a, t] = kt[..., 0]
+        QxuT = Qux.transpose(0, 2, 1)
+        Vt = Q[:a, t] + AT[t] @ VA + QxuT @ Kt
+        V[:a, t] = 0.5 * (Vt + Vt.transpose(0, 2, 1))
+        v[:a, t] = (q[:a, t, :, None] + AT[t] @ vc + QxuT @ kt)[..., 0]
+    _check_convex(Quu, R, B, V, started=np.arange(N) >= starts[:, None])
+    return K, kff, V, v
+
+
+def _check_convex(Quu, R, B, V, started, rtol=1e-9):
+    """Raise if the control Hessian ``R + B'V B`` of some started stage is not positive definite."""
+    sym = 0.5 * (Quu + Quu.swapaxes(-1, -2))
+    finite = np.all(np.isfinite(sym), axis=(-2, -1))
+    eig = np.full(sym.shape[:-2], np.nan)
+    eig[finite] = np.linalg.eigvalsh(sym[finite])[:, 0]
+    BVB = np.einsum("kia,pkij,kjb->pkab", B, V[:, 1:], B)
+    scale = np.abs(R).max(axis=(-2, -1)) + np.abs(BVB).max(axis=(-2, -1))
+    bad = np.argwhere(~(eig > rtol * scale) & started)
+    if len(bad):
+        p, t = bad[np.argmax(bad[:, 1])]
+        raise ValueError(
+            f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} has eigenvalue "
+            f"{eig[p, t]:.3g} (not positive definite); " + _UNBOUNDED)
+
+
 def lq_cost(xs, us, Q, R, q=None, r=None, QN=None, qN=None, M=None):
     """Objective value of a given trajectory ``(xs, us)`` under the LQ cost above."""
     xs, us = np.asarray(xs, float), np.asarray(us, float)
@@ -79,7 +150,7 @@ def lq_cost(xs, us, Q, R, q=None, r=None, QN=None, qN=None, M=None):
     return float(running + 0.5 * xN @ QN @ xN + qN @ xN)
 
 
-def solve_lq(A, B, Q, R, x0, N, q=None, r=None, QN=None, qN=None, M=None, c=None, rtol=1e-9):
+def solve_lq(A, B, Q, R, x0, N, q=None, r=None, QN=None, qN=None, M=None, c=None):
     """Solve the finite-horizon LQ problem above exactly (backward Riccati pass,
     forward rollout); return an :class:`LQSolution`.
 
@@ -87,7 +158,7 @@ def solve_lq(A, B, Q, R, x0, N, q=None, r=None, QN=None, qN=None, M=None, c=None
     ``R`` (m, m) or (N, m, m); ``q``, ``r``, ``M``, ``c`` likewise (default zero);
     ``QN`` (n, n) and ``qN`` (n,) the terminal cost (default zero).
     Raises ValueError when the problem is unbounded below or has no unique
-    minimiser (some ``Q_uu,k`` has an eigenvalue <= ``rtol`` times its scale).
+    minimiser (some ``Q_uu,k`` has an eigenvalue <= 1e-9 times its scale).
     """
     if not isinstance(N, (int, np.integer)) or N < 1:
         raise ValueError(f"N must be a positive integer, got {N!r}")
@@ -110,36 +181,13 @@ def solve_lq(A, B, Q, R, x0, N, q=None, r=None, QN=None, qN=None, M=None, c=None
     QN = _is_finite("QN", _terminal("QN", np.zeros((n, n)) if QN is None else QN, (n, n)))
     qN = _is_finite("qN", _terminal("qN", np.zeros(n) if qN is None else qN, (n,)))
 
-    V = np.empty((N + 1, n, n))
-    v = np.empty((N + 1, n))
-    K = np.empty((N, m, n))
-    kff = np.empty((N, m))
-    V[N], v[N] = 0.5 * (QN + QN.T), qN
-    for t in range(N - 1, -1, -1):
-        At, Bt = A[t], B[t]
-        VB = V[t + 1] @ Bt
-        vc = v[t + 1] + V[t + 1] @ c[t]
-        Quu = R[t] + Bt.T @ VB
-        Quu = 0.5 * (Quu + Quu.T)
-        Qux = M[t].T + VB.T @ At
-        eig = np.linalg.eigvalsh(Quu)
-        scale = np.abs(R[t]).max() + np.abs(Bt.T @ VB).max()
-        if eig[0] <= rtol * scale:
-            raise ValueError(
-                f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} has eigenvalue "
-                f"{eig[0]:.3g} (not positive definite), so the cost has no unique finite minimiser "
-                "(for a legible objective (1+alpha) J1 - J0 with x' = u this means alpha <= 0)")
-        KK = -np.linalg.solve(Quu, np.concatenate([Qux, (r[t] + Bt.T @ vc)[:, None]], axis=1))
-        K[t], kff[t] = KK[:, :n], KK[:, n]
-        Vt = Q[t] + At.T @ V[t + 1] @ At + Qux.T @ K[t]
-        V[t] = 0.5 * (Vt + Vt.T)
-        v[t] = q[t] + At.T @ vc + Qux.T @ kff[t]
-
+    K, kff, V, v = riccati_backward(A, B, Q[None], R[None], q[None], r[None], QN[None], qN[None], M=M[None], c=c)
+    K, kff, V, v = K[0], kff[0], V[0], v[0]
     xs = np.empty((N + 1, n))
     us = np.empty((N, m))
-    xs[0] = x0
+    x = xs[0] = x0
     for t in range(N):
-        us[t] = K[t] @ xs[t] + kff[t]
-        xs[t + 1] = A[t] @ xs[t] + B[t] @ us[t] + c[t]
+        u = us[t] = K[t] @ x + kff[t]
+        x = xs[t + 1] = A[t] @ x + B[t] @ u + c[t]
     cost = lq_cost(xs, us, Q, R, q, r, QN, qN, M)
     return LQSolution(xs=xs, us=us, K=K, k=kff, V=V, v=v, cost=cost)

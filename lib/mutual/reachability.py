@@ -19,7 +19,12 @@ import hashlib
 import json
 from dataclasses import dataclass, field
 
+import hj_reachability as hj
+import jax
+import jax.numpy as jnp
+import jaxlib
 import numpy as np
+from tqdm import tqdm
 
 from . import __version__
 from .atomic import atomic_path
@@ -71,7 +76,7 @@ QUICK_GRID = GridSpec(8.0, (41, 41, 24))
 @dataclass(frozen=True)
 class SolverSpec:
     """How V is computed: hj-reachability accuracy, chunk length (s), convergence tolerance, time cap (s)."""
-    accuracy: str = "medium"
+    accuracy: str = "low"
     chunk_time: float = 0.5
     tolerance: float = 2e-3
     max_time: float = 60.0
@@ -85,8 +90,6 @@ class SolverSpec:
 
 @functools.lru_cache(maxsize=None)
 def _hj_grid(spec):
-    import hj_reachability as hj
-    import jax.numpy as jnp
     domain = hj.sets.Box(jnp.array([-spec.half_width, -spec.half_width, -np.pi]),
                          jnp.array([spec.half_width, spec.half_width, np.pi]))
     return hj.Grid.from_lattice_parameters_and_boundary_conditions(domain, spec.shape, periodic_dims=2)
@@ -95,8 +98,6 @@ def _hj_grid(spec):
 @functools.lru_cache(maxsize=None)
 def _chunk_stepper(spec, accuracy, batched):
     """A compiled ``advance(w_max, d_max, speed, values, t0, t1)``; ``w_max`` is traced (vmapped if batched)."""
-    import hj_reachability as hj
-    import jax
     grid = spec.build()
     settings = hj.SolverSettings.with_accuracy(accuracy,
                                                hamiltonian_postprocessor=hj.solver.backwards_reachable_tube)
@@ -110,15 +111,12 @@ def _chunk_stepper(spec, accuracy, batched):
 
 
 def _initial_values(spec, radius):
-    import jax.numpy as jnp
     states = spec.build().states
     return jnp.hypot(states[..., 0], states[..., 1]) - radius
 
 
 def _converge(w_maxes, radius, speed, d_max, spec, solver, batch, progress):
     """Step V(x, t) backwards in chunks until max |dV| < tolerance; return (values (b, ...), times (b,))."""
-    import jax.numpy as jnp
-    from tqdm.auto import tqdm
     l0 = _initial_values(spec, radius)
     groups = [np.asarray(w_maxes)] if batch == "vmap" else [np.array([w]) for w in w_maxes]
     out, times = [], []
@@ -147,10 +145,7 @@ def _converge(w_maxes, radius, speed, d_max, spec, solver, batch, progress):
 
 
 def _versions():
-    import hj_reachability
-    import jax
-    import jaxlib
-    return {"jax": jax.__version__, "jaxlib": jaxlib.__version__, "hj_reachability": hj_reachability.__version__,
+    return {"jax": jax.__version__, "jaxlib": jaxlib.__version__, "hj_reachability": hj.__version__,
             "numpy": np.__version__, "mutual": __version__}
 
 
@@ -293,16 +288,16 @@ class ValueLibrary:
         return _interpolate(self.grid_spec, self.flat_values, states, fill_value)
 
 
-def unsafe_set_contains(outer, inner, tolerance=None):
-    """Whether ``{V_outer < 0}`` contains ``{V_inner < 0}`` on the grid, up to ``tolerance`` in value.
+def unsafe_set_contains(outer, inner, level=0.0):
+    """Whether ``{V_inner < 0}`` lies inside ``{V_outer < level}`` at every grid node.
 
-    ``tolerance`` defaults to one x-spacing (the grid's resolution); used for the conservativeness
-    prior of Sec. 4.4.
+    ``level = 0``: the conservativeness prior of Sec. 4.4 (on the Dubins family it holds for
+    ``w_outer <= w_inner``). ``level = mu``: eq. (4.4) for a supervisor ``V_S = outer`` with margin
+    ``mu``, i.e. ``Omega_S`` inside ``Omega``.
     """
     if outer.grid_spec != inner.grid_spec:
         raise ValueError("outer and inner must share one grid_spec")
-    tolerance = outer.grid_spec.spacings[0] if tolerance is None else tolerance
-    return bool(np.all(outer.values[inner.values < 0] < tolerance))
+    return bool(np.all(outer.values[inner.values < 0] < level))
 
 
 def _check_domain(w_maxes, radius, speed, spec):
@@ -335,10 +330,10 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
         raise ValueError("grid_spec must be a GridSpec and solver a SolverSpec")
     _check_domain(w, obstacle_radius, speed, grid_spec)
 
-    keys = [cache_key(wi, obstacle_radius, speed, d_max, grid_spec, solver) for wi in w]
+    keys = {wi: cache_key(wi, obstacle_radius, speed, d_max, grid_spec, solver) for wi in w}
     found = {}
     if cache:
-        for wi, key in zip(w, keys):
+        for wi, key in keys.items():
             if _cache_file(key).exists():
                 with np.load(_cache_file(key)) as f:
                     found[wi] = (f["values"], float(f["horizon"]))
@@ -348,7 +343,7 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
         for wi, v, h in zip(missing, values, horizons):
             found[wi] = (v, h)
             if cache:
-                with atomic_path(_cache_file(keys[list(w).index(wi)])) as tmp:
+                with atomic_path(_cache_file(keys[wi])) as tmp:
                     np.savez(tmp, values=v, horizon=h)
     members = tuple(ValueFunction(float(wi), float(obstacle_radius), grid_spec, found[wi][0], float(speed),
                                   float(d_max), found[wi][1]) for wi in w)

@@ -2,7 +2,7 @@
 
 Trial table (one row per participant x trial x measure), ``TRIAL_COLUMNS``:
 
-* ``participant`` -- integer id (1, 2, ...);
+* ``participant`` -- participant id, a string (``P01``, ...);
 * ``comparison``  -- the pair of teams, e.g. ``Standard-Learned`` (:func:`mutual.study_design.comparison_label`);
 * ``order``       -- 1 or 2, the position of this trial within its comparison;
 * ``treatment``   -- the team's safe set: ``Standard``, ``Learned`` or ``Conservative``;
@@ -13,10 +13,10 @@ Trial table (one row per participant x trial x measure), ``TRIAL_COLUMNS``:
   per team: "I trusted this team", ..., "I preferred this team");
 * ``value``       -- the number.
 
-Phase II intervention table (one row per intervention), ``INTERVENTION_COLUMNS``:
-``participant``, ``scene`` (the clip watched), ``x``, ``y``, ``theta`` (the robot's state when the
-supervisor clicked). The same files hold a real study's data; the simulated ones carry
-``simulated`` in their file names.
+Phase II intervention table: the schema of :mod:`mutual.supervisor` (``participant``, ``trial``
+= the scene watched, ``time`` into the scene, the robot state ``x``, ``y``, ``theta`` relative to
+the obstacle centre when the supervisor intervened; optional ``obstacle_x``, ``obstacle_y``).
+The same files hold a real study's data; the simulated ones carry ``simulated`` in their names.
 
 Generator step: ``python -m mutual.study_data`` runs the simulated study
 (:func:`mutual.teaming.simulate_study`, full size) and writes ``data/ch5_simulated_*.csv``.
@@ -26,10 +26,10 @@ import numpy as np
 import pandas as pd
 
 from .atomic import atomic_path
+from .supervisor import validate_interventions
 from .study_design import TREATMENTS, comparison_label
 
 TRIAL_COLUMNS = ["participant", "comparison", "order", "treatment", "task_version", "trial", "measure", "value"]
-INTERVENTION_COLUMNS = ["participant", "scene", "x", "y", "theta"]
 OBJECTIVE_MEASURES = ("trips", "interventions", "collisions", "false_positives", "score")
 COUNT_MEASURES = ("trips", "interventions", "collisions", "false_positives")
 LIKERT_MEASURES = ("trust", "performance", "interpretability", "confidence", "fluency", "preference")
@@ -69,7 +69,10 @@ def validate_trials(df):
     bad = sorted(set(df["measure"]) - set(known))
     if bad:
         raise ValueError(f"trial table: unknown measure(s) {bad}; expected one of {known}")
-    for col in ("participant", "order", "task_version", "trial"):
+    df["participant"] = df["participant"].astype(str)
+    if (df["participant"].str.strip() == "").any():
+        raise ValueError("trial table: column 'participant' has empty ids")
+    for col in ("order", "task_version", "trial"):
         if not _integer_valued(df[col]):
             raise ValueError(f"trial table: column {col!r} must hold whole numbers")
         df[col] = pd.to_numeric(df[col]).astype(int)
@@ -102,21 +105,6 @@ def validate_trials(df):
     return df
 
 
-def validate_interventions(df):
-    """Check a Phase II intervention table (``INTERVENTION_COLUMNS``, finite states); return it."""
-    _require_columns(df, INTERVENTION_COLUMNS, "intervention table")
-    df = df[INTERVENTION_COLUMNS].copy()
-    for col in ("participant", "scene"):
-        if not _integer_valued(df[col]):
-            raise ValueError(f"intervention table: column {col!r} must hold whole numbers")
-        df[col] = pd.to_numeric(df[col]).astype(int)
-    states = df[["x", "y", "theta"]].apply(pd.to_numeric, errors="coerce")
-    if not np.isfinite(states.to_numpy(dtype=float)).all():
-        raise ValueError("intervention table: x, y, theta must be finite numbers")
-    df[["x", "y", "theta"]] = states
-    return df
-
-
 def write_table(df, path, kind):
     """Validate ``df`` as a ``kind`` ('trials' or 'interventions') table and write it atomically as CSV."""
     df = _validator(kind)(df)
@@ -127,7 +115,7 @@ def write_table(df, path, kind):
 
 def read_table(path, kind):
     """Read and validate a ``kind`` ('trials' or 'interventions') CSV table."""
-    return _validator(kind)(pd.read_csv(path))
+    return _validator(kind)(pd.read_csv(path, dtype={"participant": str}))
 
 
 def _validator(kind):
@@ -145,22 +133,23 @@ def illustrative_questionnaire(design, seed=0):
     """
     rng = np.random.default_rng(seed)
     rows = design.loc[design.index.repeat(len(LIKERT_MEASURES))].reset_index(drop=True)
+    rows["participant"] = rows["participant"].map(lambda p: p if isinstance(p, str) else f"P{int(p):02d}")
     rows["measure"] = np.tile(LIKERT_MEASURES, len(design))
     rows["value"] = rng.integers(LIKERT_RANGE[0], LIKERT_RANGE[1] + 1, size=len(rows))
-    return validate_trials(rows)
+    return validate_trials(rows[TRIAL_COLUMNS])
 
 
 def _main():
     """Generator step: run the full simulated study and write ``data/ch5_simulated_*.csv``."""
     from .paths import DATA
-    from .study_design import study_design
-    from .teaming import simulate_study
+    from .study_design import DESIGN_COLUMNS
+    from .teaming import simulate_study, study_value_functions
 
-    study = simulate_study(quick=False, seed=0)
+    study = simulate_study(*study_value_functions(quick=False, progress=True), seed=0)
     write_table(study.trials, DATA / "ch5_simulated_phase3.csv", "trials")
     write_table(study.interventions, DATA / "ch5_simulated_phase2_interventions.csv", "interventions")
-    write_table(illustrative_questionnaire(study_design(len(study.participants)), seed=0),
-                DATA / "ch5_illustrative_questionnaire.csv", "trials")
+    analysed = study.trials.drop_duplicates(["participant", "trial"])[DESIGN_COLUMNS].reset_index(drop=True)
+    write_table(illustrative_questionnaire(analysed, seed=0), DATA / "ch5_illustrative_questionnaire.csv", "trials")
     with atomic_path(DATA / "ch5_simulated_participants.csv") as tmp:
         study.participants.to_csv(tmp, index=False, float_format="%.6g")
 

@@ -211,3 +211,27 @@ def recover_from_summary(means, F, df_num, df_den):
     ms_treatment = n * np.var(list(means.values()), ddof=1)
     mse = float(ms_treatment / F)
     return {"n": n, "mse": mse, "p": f_p_value(F, df_num, df_den), "tukey": tukey_from_summary(means, mse, n)}
+
+
+def significance_stars(p):
+    """'***' (p < .001), '**' (< .01), '*' (< .05) or 'n.s.'."""
+    return "***" if p < 0.001 else "**" if p < 0.01 else "*" if p < 0.05 else "n.s."
+
+
+def plot_condition_means(ax, anova, tukey, colors=None):
+    """Fig. 5.4: the mean of each level with standard-error bars and Tukey significance brackets."""
+    levels = list(anova.levels)
+    cells = anova.cells[levels]
+    means, se = cells.mean(), cells.std(ddof=1) / np.sqrt(len(cells))
+    x = np.arange(len(levels))
+    ax.bar(x, means, yerr=se, capsize=4, color=colors or None, alpha=0.85)
+    ax.set_xticks(x, levels)
+    top = float((means + se).max())
+    step = 0.09 * top if top > 0 else 0.1
+    for i, row in enumerate(tukey.itertuples()):
+        a, b = levels.index(row.A), levels.index(row.B)
+        y = top + step * (i + 1)
+        ax.plot([a, a, b, b], [y - step * 0.3, y, y, y - step * 0.3], color="black", lw=0.8)
+        ax.text((a + b) / 2, y, f"{significance_stars(row.p)} (p={row.p:.3g})", ha="center", va="bottom", fontsize=7)
+    ax.set_ylim(0, top + step * (len(tukey) + 1.2))
+    return ax

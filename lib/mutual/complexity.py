@@ -1,0 +1,96 @@
+"""Measuring how the constraint ranking's cost grows (Section 2.4, O(|X|^2 |A| |C|)).
+
+Two measures of the same runs: the multiply-adds the backups actually perform in
+their products with S -- counted while the code runs, so deterministic and
+machine-independent, the measure the notebooks report -- and best-of-n wall time,
+which varies from machine to machine and belongs to ``make bench`` and to
+figures shown, never saved.
+"""
+
+import time
+from contextlib import contextmanager
+from unittest import mock
+
+import numpy as np
+
+from . import mdp as mdp_module
+from .chance_constraints import chance_forbidden
+from .constraint_inference import log_partition, value_ratio
+from .mdp import gridworld
+
+
+def best_time(fn, repeats=3):
+    """The smallest wall time (seconds) of ``repeats`` calls of ``fn()``."""
+    if repeats < 1:
+        raise ValueError(f"repeats: must be >= 1, got {repeats!r}")
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+@contextmanager
+def counting_multiply_adds():
+    """Within the block, tally every product of S (as an (X*A, X) matrix) with a value
+    matrix that the backups (Algorithms 3 and 4, the soft backup) perform.
+
+    Yields a dict: ``products`` (how many) and ``multiply_adds`` (their work: the
+    entries of S a product touches -- all X^2 A of a dense S, the nnz of a sparse
+    one -- times the value matrix's columns). The element-wise log-sum-exp over
+    actions, O(|X||A|) per column and step, is of lower order and not counted.
+    """
+    tally = {"products": 0, "multiply_adds": 0}
+    product = mdp_module._times_transitions
+
+    def counted(mdp, V):
+        entries = mdp.transitions.nnz if mdp.is_sparse else mdp.transitions.size
+        tally["products"] += 1
+        tally["multiply_adds"] += int(entries) * (V.shape[1] if V.ndim == 2 else 1)
+        return product(mdp, V)
+
+    with mock.patch.object(mdp_module, "_times_transitions", counted):
+        yield tally
+
+
+def power_law_exponent(sizes, cost):
+    """The slope b of the least-squares fit log(cost) = a + b log(sizes)."""
+    sizes, cost = np.asarray(sizes, dtype=float), np.asarray(cost, dtype=float)
+    if sizes.shape != cost.shape or sizes.size < 2 or np.any(sizes <= 0) or np.any(cost <= 0):
+        raise ValueError("sizes/cost: need two or more positive pairs of equal length")
+    return float(np.polyfit(np.log(sizes), np.log(cost), 1)[0])
+
+
+def all_single_candidates(mdp):
+    """Allowed-action masks of every single-state (psi = 0) and single-action candidate: (X, A, X + A)."""
+    X, A = mdp.n_states, mdp.n_actions
+    actions = np.ones((X, A, A), dtype=bool)
+    actions[:, np.arange(A), np.arange(A)] = False
+    return np.concatenate([~chance_forbidden(mdp, np.arange(X), 0.0), actions], axis=2)
+
+
+def gridworld_ranking(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4):
+    """A call that ranks the first ``n_candidates`` (default all X + A) single candidates
+    on a ``side`` x ``side`` gridworld by Algorithm 4 (``algorithm=4``) or 3."""
+    if algorithm not in (3, 4):
+        raise ValueError(f"algorithm: must be 3 or 4, got {algorithm!r}")
+    g = gridworld(side, side, (0, 0), (side - 1, 0), slip=slip, horizon=horizon, sparse=sparse)
+    masks = all_single_candidates(g.mdp)[:, :, :n_candidates]
+    if algorithm == 4:
+        return lambda: log_partition(g.mdp, masks)
+    full = np.ones(masks.shape[:2], dtype=bool)
+    return lambda: value_ratio(g.mdp, full, masks)
+
+
+def gridworld_ranking_work(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4):
+    """Multiply-adds (:func:`counting_multiply_adds`) of one :func:`gridworld_ranking` run."""
+    run = gridworld_ranking(side, n_candidates, sparse, slip, horizon, algorithm)
+    with counting_multiply_adds() as tally:
+        run()
+    return tally["multiply_adds"]
+
+
+def gridworld_ranking_time(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4, repeats=3):
+    """Best wall time (seconds, this machine) of ``repeats`` :func:`gridworld_ranking` runs."""
+    return best_time(gridworld_ranking(side, n_candidates, sparse, slip, horizon, algorithm), repeats)

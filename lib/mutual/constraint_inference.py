@@ -1,0 +1,381 @@
+"""Maximum-likelihood constraint inference from (stochastic) demonstrations
+(Chapter 2, Algorithms 1-4; Chapter 3's chance thresholds).
+
+Every algorithm takes K candidate constraint sets at once as an allowed-action
+mask of shape (X, A, K) and is vectorized over states, actions and candidates;
+only time (and, to bound memory, blocks of candidates) is looped over.
+
+* :func:`expected_features` -- Algorithm 1 (Ziebart's forward-backward pass).
+* :func:`constraint_accrual` -- Algorithm 2 (Scobee and Sastry's forward accrual;
+  exact for deterministic dynamics only).
+* :func:`value_ratio` -- Algorithm 3 (Theorem 2.3.1: log F_{C+} by a modified backup).
+* :func:`log_partition` -- Algorithm 4 (the pure soft backup: log Z_{C+} = V_{C+,0}).
+* :func:`greedy_inference` -- the greedy iterative procedure of Section 2.4.
+* :func:`horizon_sensitivity` -- its first round as the (unstated) horizon T varies.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from .chance_constraints import chance_forbidden, max_likelihood_thresholds
+from .mdp import (check_demonstrations, check_mask, expected_next, masked_logsumexp, sample_demonstrations,
+                  soft_bellman_backup, soft_policy)
+
+_BLOCK_ENTRIES = 2 ** 22  # bound on X * A * (candidates per block): 32 MiB of float64
+
+
+def _masks(mdp, masks):
+    masks = check_mask(mdp, masks, "masks")
+    return masks[:, :, None] if masks.ndim == 2 else masks
+
+
+def _blocks(mdp, n):
+    size = max(1, _BLOCK_ENTRIES // (mdp.n_states * mdp.n_actions))
+    return [slice(i, min(i + size, n)) for i in range(0, n, size)]
+
+
+def log_partition(mdp, masks):
+    """Algorithm 4: log Z_{C,0}(x) = V^soft_{C,0}(x) for every candidate mask (eq. 2.24).
+
+    ``masks``: Phi_C as (X, A) or (X, A, K). Returns (X, K) (K = 1 for one mask).
+    The backup runs in log space, so long horizons and large rewards are safe.
+    """
+    return _batched_backup(mdp, _masks(mdp, masks))[0]
+
+
+def _batched_backup(mdp, masks, demos=None):
+    """Algorithm 4 over blocks of candidates; with ``demos`` also each candidate's
+    demonstration log-likelihood sum_i sum_t log P_C(a_t | x_t, t) (eq. 2.19), gathered
+    from the same pass (-inf where a demonstration is infeasible)."""
+    K = masks.shape[2]
+    V0, log_lik = np.empty((mdp.n_states, K)), np.zeros(K)
+    reward = mdp.reward[:, :, None]
+    for block in _blocks(mdp, K):
+        forbidden = ~masks[:, :, block]
+        V = np.repeat(mdp.terminal_reward[:, None], forbidden.shape[2], axis=1)
+        for t in range(mdp.horizon - 1, -1, -1):
+            Q = expected_next(mdp, V)
+            Q += reward
+            if demos is not None and t < demos.steps:
+                x, a = demos.states[:, t], demos.actions[:, t]
+                q = np.where(forbidden[x, a], -np.inf, Q[x, a])
+            V = masked_logsumexp(Q, forbidden)
+            if demos is not None and t < demos.steps:
+                with np.errstate(invalid="ignore"):
+                    step = (q - V[x]).sum(axis=0)
+                log_lik[block] += np.where(np.isnan(step), -np.inf, step)
+        V0[:, block] = V
+    return V0, log_lik
+
+
+def value_ratio(mdp, base_mask, masks):
+    """Algorithm 3 (Theorem 2.3.1, eq. 2.26): log F_{C+,0}(x) = log(Z_{C+} / Z_{C0}) for each
+    candidate mask, by the modified backup F_t = E_{a ~ P_C0}[Phi_{C+} exp(E_{x'} log F_{t+1})].
+
+    ``base_mask``: Phi_{C0} (X, A); ``masks``: Phi_{C+} (X, A, K). Returns log F as (X, K),
+    -inf where C0 itself allows no trajectory. Computed in log space alongside the
+    baseline backup (one backward pass).
+    """
+    base = check_mask(mdp, base_mask, "base_mask")
+    masks = _masks(mdp, masks)
+    if base.ndim != 2:
+        raise ValueError("base_mask: must be one (X, A) mask")
+    _, Q0 = soft_bellman_backup(mdp, base)
+    out = np.empty((mdp.n_states, masks.shape[2]))
+    for block in _blocks(mdp, masks.shape[2]):
+        forbidden = ~masks[:, :, block]
+        log_f = np.zeros((mdp.n_states, forbidden.shape[2]))
+        for t in range(mdp.horizon - 1, -1, -1):
+            log_pi = _log_policy(Q0[t])
+            D = expected_next(mdp, log_f)
+            D += log_pi[:, :, None]
+            log_f = masked_logsumexp(D, forbidden)
+        out[:, block] = log_f
+    return out
+
+
+def _log_policy(Q):
+    """log P_C0(a | x) = Q - V (eq. 2.19), -inf for forbidden actions and dead states."""
+    V = masked_logsumexp(Q.copy(), None)
+    with np.errstate(invalid="ignore"):
+        log_pi = Q - V[:, None]
+    log_pi[np.isnan(log_pi)] = -np.inf
+    return log_pi
+
+
+def constraint_accrual(mdp, base_mask, masks):
+    """Algorithm 2 (Scobee and Sastry): P_{C0}(xi satisfies C+) for each candidate, by
+    forward-simulating the C0 policy from ``mdp.initial`` and accruing the mass that
+    first violates C+. Returns (K,). Equals Z_{C+}/Z_{C0} only for deterministic dynamics.
+    """
+    pi = soft_policy(mdp, check_mask(mdp, base_mask, "base_mask"))
+    masks = _masks(mdp, masks)
+    P_T = mdp.transitions.T
+    out = np.empty(masks.shape[2])
+    for block in _blocks(mdp, masks.shape[2]):
+        violates = ~masks[:, :, block]
+        D = mdp.initial.copy()
+        H = np.zeros((mdp.n_states, violates.shape[2]))
+        for t in range(mdp.horizon):
+            # lines 24 and 33: H(t+1) = sum_{x,a} (H + phi (D - H)) P(a|x) S(x, a, .)
+            W = np.where(violates, D[:, None, None], H[:, None, :])
+            W *= pi[t][:, :, None]
+            H = np.asarray(P_T @ W.reshape(-1, W.shape[2]))
+            D = np.asarray(P_T @ (D[:, None] * pi[t]).ravel())
+        out[block] = 1.0 - H.sum(axis=0)
+    return out
+
+
+def algorithm_agreement(mdp, demos, candidates, base_mask=None):
+    """Compare Algorithms 2, 3 and 4 on every candidate (Theorem 2.3.1, eq. 2.25).
+
+    Returns ``alg34`` (max |F_3 - exp(V_C+ - V_C0)| over candidates and states where C0 is
+    feasible), ``alg23`` (max |F_2 - F_3(start)|, with ``mdp.initial`` a point mass),
+    ``same_ranking`` (Algorithms 3 and 4 order the candidates identically), arrays
+    ``F2``, ``F3`` (K,) and, for the feasible candidates, ``log_f`` and exact ``gain``
+    from :func:`rank_candidates`.
+    """
+    base = check_mask(mdp, base_mask, "base_mask")
+    masks = base[:, :, None] & ~candidates.forbidden
+    V0, V = log_partition(mdp, base)[:, 0], log_partition(mdp, masks)
+    log_f3 = value_ratio(mdp, base, masks)
+    finite = np.isfinite(V)
+    start = int(np.argmax(mdp.initial))
+    F2, F3 = constraint_accrual(mdp, base, masks), np.exp(log_f3[start])
+    log_f, gain = rank_candidates(mdp, demos, candidates.forbidden[:, :, candidates.feasible], base)
+    with np.errstate(invalid="ignore"):
+        alg34 = np.abs(np.exp(log_f3[finite]) - np.exp((V - V0[:, None])[finite]))
+    return dict(alg34=float(alg34.max()), alg23=float(np.max(np.abs(F2 - F3))), F2=F2, F3=F3, log_f=log_f, gain=gain,
+                same_ranking=bool(np.array_equal(np.argsort(log_f3[start], kind="stable"),
+                                                 np.argsort(V[start] - V0[start], kind="stable"))))
+
+
+def state_action_visitation(mdp, mask=None):
+    """Expected visitation D(t, x) P_C(a | x, t) of every (t, x, a), shape (T, X, A),
+    from ``mdp.initial`` under the constrained soft policy (Algorithm 1, lines 17-30)."""
+    pi = soft_policy(mdp, mask)
+    occupancy = np.empty_like(pi)
+    D = mdp.initial
+    for t in range(mdp.horizon):
+        occupancy[t] = D[:, None] * pi[t]
+        D = np.asarray(mdp.transitions.T @ occupancy[t].ravel())
+    return occupancy
+
+
+def expected_features(mdp, features, mask=None):
+    """Algorithm 1: expected feature accruals sum_t sum_{x,a} D(t, x) P(a | x, t) phi(x, a).
+
+    ``features``: phi as (X, A, n) or (X, n) (state features). Returns (n,).
+    """
+    phi = np.asarray(features, dtype=float)
+    if phi.ndim == 2 and phi.shape[0] == mdp.n_states:
+        phi = np.repeat(phi[:, None, :], mdp.n_actions, axis=1)
+    if phi.ndim != 3 or phi.shape[:2] != (mdp.n_states, mdp.n_actions):
+        raise ValueError(f"features: shape {phi.shape} should be (X, A, n) or (X, n)")
+    return np.einsum("txa,xan->n", state_action_visitation(mdp, mask), phi)
+
+
+# ---------------------------------------------------------------- candidates and greedy inference
+
+@dataclass(frozen=True, eq=False)
+class Candidates:
+    """Single-constraint hypotheses C+ (Section 2.4.1).
+
+    ``kind[k]`` is "state" or "action", ``index[k]`` the state or action, ``psi[k]``
+    the state's chance threshold (nan for actions), ``forbidden`` (X, A, K) the actions
+    each forbids, ``feasible[k]`` whether it keeps every demonstration possible.
+    """
+
+    kind: np.ndarray
+    index: np.ndarray
+    psi: np.ndarray
+    forbidden: np.ndarray
+    feasible: np.ndarray
+
+    def __len__(self):
+        return self.kind.size
+
+    def label(self, k):
+        return f"{self.kind[k]} {self.index[k]}"
+
+    def find(self, kind, index):
+        """The candidate number of the ``kind`` ("state"/"action") constraint on ``index``."""
+        hit = np.flatnonzero((self.kind == kind) & (self.index == index))
+        if hit.size != 1:
+            raise ValueError(f"kind/index: no single {kind} candidate on {index}")
+        return int(hit[0])
+
+
+def constraint_candidates(mdp, demos, states=True, actions=True, chance=True):
+    """One candidate per state (a chance constraint, eq. 3.1) and per action (forbidden everywhere).
+
+    With ``chance`` each state's threshold is the maximum-likelihood psi*(x) of
+    eq. (3.3) (Lemma 3.2.1); otherwise psi = 0, the hard state constraints of
+    Chapter 2. A candidate is infeasible -- never chosen -- if it forbids a
+    demonstrated action in its state (a demonstrated transition exceeds its
+    threshold), forbids a demonstrated action, or (psi = 0) forbids a demonstrated state.
+    """
+    check_demonstrations(mdp, demos)
+    X, A = mdp.n_states, mdp.n_actions
+    state_ids = np.arange(X) if states else np.empty(0, dtype=int)
+    action_ids = np.arange(A) if actions else np.empty(0, dtype=int)
+    psi = max_likelihood_thresholds(mdp, demos)[state_ids] if chance else np.zeros(state_ids.size)
+    forbidden_actions = np.zeros((X, A, action_ids.size), dtype=bool)
+    forbidden_actions[:, action_ids, np.arange(action_ids.size)] = True
+    forbidden = np.concatenate([chance_forbidden(mdp, state_ids, psi), forbidden_actions], axis=2)
+    x, a = demos.pairs()
+    feasible = ~forbidden[x, a].any(axis=0)
+    visited = np.zeros(X, dtype=bool)
+    visited[demos.states.ravel()] = True
+    feasible[: state_ids.size] &= ~((psi == 0) & visited[state_ids])
+    kind = np.array(["state"] * state_ids.size + ["action"] * action_ids.size)
+    return Candidates(kind, np.concatenate([state_ids, action_ids]),
+                      np.concatenate([psi, np.full(action_ids.size, np.nan)]), forbidden, feasible)
+
+
+def rank_candidates(mdp, demos, forbidden, base_mask=None):
+    """Score candidates that add ``forbidden`` (X, A, K) to Phi_{C0} = ``base_mask``, by Algorithm 4.
+
+    Returns ``(log_f, gain)``, both (K,): ``log_f`` the mean over demonstrations of
+    log F_{C+,0}(x_0) (eq. 2.25; the thesis's ranking, smallest first) and ``gain`` the
+    exact per-demonstration log-likelihood gain of C+ over C0. The two agree for
+    deterministic dynamics (gain = -log_f); under stochastic dynamics the realised
+    transitions add a correction. Candidates that make a demonstration infeasible
+    (also through combining with C0) get log_f = nan and gain = -inf.
+    """
+    base = check_mask(mdp, base_mask, "base_mask")
+    starts = demos.states[:, 0]
+    V0, ll0 = _batched_backup(mdp, base[:, :, None], demos)
+    if not np.isfinite(ll0[0]):
+        raise ValueError("base_mask: the baseline constraints make a demonstration infeasible")
+    V, ll = _batched_backup(mdp, base[:, :, None] & ~forbidden, demos)
+    feasible = np.isfinite(ll)
+    with np.errstate(invalid="ignore"):
+        log_f = np.where(feasible, (V[starts] - V0[starts]).mean(axis=0), np.nan)
+    return log_f, np.where(feasible, (ll - ll0[0]) / demos.n, -np.inf)
+
+
+@dataclass(frozen=True, eq=False)
+class InferenceResult:
+    """Greedy inference history: ``chosen[i]`` the candidate added in round i,
+    ``log_f[i]`` (K,) every candidate's mean log F in round i (nan: infeasible or chosen),
+    ``gain[i]`` (K,) their exact per-demonstration log-likelihood gains, ``mask`` the final Phi_C."""
+
+    chosen: list
+    log_f: list
+    gain: list
+    mask: np.ndarray
+
+    @property
+    def gains(self):
+        """-mean log F of each chosen constraint: its per-demonstration log-likelihood
+        gain as the thesis counts it (eq. 2.25)."""
+        return np.array([-lf[k] for lf, k in zip(self.log_f, self.chosen)])
+
+    @property
+    def exact_gains(self):
+        """The exact per-demonstration log-likelihood gain of each chosen constraint."""
+        return np.array([g[k] for g, k in zip(self.gain, self.chosen)])
+
+    @property
+    def F(self):
+        """F of each chosen constraint (geometric mean over the demonstrations' starts)."""
+        return np.exp(-self.gains)
+
+    def recovered_at(self, targets):
+        """The round (1-based) by which every candidate in ``targets`` has been chosen, or None."""
+        rounds = [self.chosen.index(k) + 1 if k in self.chosen else None for k in targets]
+        return None if None in rounds else max(rounds, default=0)
+
+    def summary(self, relevant, truth):
+        """How the run went against a known ground truth (candidate numbers): the round by
+        which all ``relevant`` ones were chosen, then the next choice's F, whether it is
+        outside ``truth``, and the ratio of -log F of the last relevant choice to the next's.
+        Entries that the run did not reach are the string "not reached"."""
+        at = self.recovered_at(relevant)
+        if at is None or at >= len(self.chosen):
+            return dict(recovered_at="not reached" if at is None else at, F_next="not reached",
+                        next_untrue="not reached", gain_drop="not reached")
+        gains = self.gains
+        return dict(recovered_at=at, F_next=float(self.F[at]), next_untrue=bool(self.chosen[at] not in truth),
+                    gain_drop=float(gains[at - 1] / gains[at]))
+
+    def n_accepted(self, min_gain):
+        """Rounds before the stopping rule fires: the first gain below ``min_gain`` ends inference."""
+        below = np.flatnonzero(self.gains < min_gain)
+        return int(below[0]) if below.size else len(self.chosen)
+
+
+def latest_recovery(rounds):
+    """The worst case over runs of :meth:`InferenceResult.summary`'s ``recovered_at``:
+    the latest round, or "not reached" if any run did not recover its targets."""
+    rounds = list(rounds)
+    if not rounds:
+        raise ValueError("rounds: need at least one run")
+    return "not reached" if "not reached" in rounds else int(max(rounds))
+
+
+def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=None, criterion="F"):
+    """Greedy iterative constraint inference (Section 2.4, after Scobee and Sastry).
+
+    Each round scores every feasible, not yet chosen candidate by Algorithm 4 and adds
+    the best: the smallest F (``criterion="F"``, the thesis's ranking, eq. 2.25) or the
+    largest exact log-likelihood gain (``criterion="likelihood"``). Stopping rule: after
+    ``rounds`` rounds, or -- when ``min_gain`` is given -- before adding a constraint
+    whose gain -log F falls below ``min_gain`` nats per demonstration (F > exp(-min_gain)):
+    once only untrue constraints remain, F retracts towards 1.
+    """
+    check_demonstrations(mdp, demos)
+    if not isinstance(rounds, (int, np.integer)) or rounds < 0:
+        raise ValueError(f"rounds: must be a non-negative integer, got {rounds!r}")
+    if criterion not in ("F", "likelihood"):
+        raise ValueError(f"criterion: must be 'F' or 'likelihood', got {criterion!r}")
+    mask = check_mask(mdp, base_mask, "base_mask").copy()
+    available = candidates.feasible.copy()
+    chosen, history, gains = [], [], []
+    for _ in range(rounds):
+        idx = np.flatnonzero(available)
+        log_f, gain = np.full(len(candidates), np.nan), np.full(len(candidates), -np.inf)
+        log_f[idx], gain[idx] = rank_candidates(mdp, demos, candidates.forbidden[:, :, idx], mask)
+        if not np.isfinite(gain).any():
+            break
+        score = np.where(np.isfinite(gain), -log_f if criterion == "F" else gain, -np.inf)
+        best = int(np.argmax(score))
+        if min_gain is not None and -log_f[best] < min_gain:
+            break
+        chosen.append(best)
+        history.append(log_f)
+        gains.append(gain)
+        mask &= ~candidates.forbidden[:, :, best]
+        available[best] = False
+    return InferenceResult(chosen, history, gains, mask)
+
+
+def horizon_sensitivity(grid_at, horizons, truth, n_demos, seed, watch_state):
+    """The first round of greedy inference (ranked by F) as the horizon T varies.
+
+    For each T in ``horizons``: ``grid_at(T)`` builds the gridworld, ``n_demos``
+    demonstrations are drawn (generator ``seed``) from its Boltzmann demonstrator
+    under the ground truth ``truth`` (Phi_C, (X, A)), and every chance candidate
+    (eq. 3.3) is ranked by F (Algorithm 4, eq. 2.25). Returns a DataFrame with one row
+    per T: the share of demonstrations ending at the goal, ``watch_state``'s psi* and
+    round-1 F (nan where that candidate is infeasible), and the first choice with its F.
+    """
+    horizons = [int(T) for T in horizons]
+    if not horizons or min(horizons) < 1:
+        raise ValueError(f"horizons: need one or more horizons >= 1, got {horizons!r}")
+    rows = []
+    for T in horizons:
+        grid = grid_at(T)
+        demos = sample_demonstrations(grid.mdp, n_demos, truth, rng=seed)
+        cand = constraint_candidates(grid.mdp, demos)
+        first = greedy_inference(grid.mdp, demos, cand, 1)
+        F = np.exp(first.log_f[0])
+        watched = cand.find("state", watch_state)
+        best = first.chosen[0]
+        rows.append({"horizon T": T, "at goal": float(np.mean(demos.states[:, -1] == grid.state(*grid.goal))),
+                     "psi* watched": float(cand.psi[watched]), "F watched, round 1": float(F[watched]),
+                     "first choice": grid.label(cand.kind[best], cand.index[best]), "F first choice": float(F[best])})
+    return pd.DataFrame(rows)

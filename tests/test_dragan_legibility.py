@@ -1,0 +1,104 @@
+"""Dragan & Srinivasa's legibility baseline against its definitions, brute force and symmetry."""
+
+import numpy as np
+import pytest
+
+from mutual.dragan_legibility import (goal_posterior, legibility_score, optimise_legibility, score_gradient,
+                                      score_weights, trajectory_cost)
+
+GOALS = np.array([[-1.0, 1.0], [1.0, 1.0]])
+S = np.zeros(2)
+
+
+def test_posterior_matches_the_full_formula():
+    """P(G | xi_{S->Q}) = exp(-C[xi_{S->Q}] - V_G(Q)) / exp(-V_G(S)) P(G) / Z, with C not cancelled by hand."""
+    rng = np.random.default_rng(0)
+    goals = rng.normal(size=(4, 2))
+    prior = np.array([0.1, 0.2, 0.3, 0.4])
+    path = np.cumsum(rng.normal(scale=0.1, size=(30, 2)), axis=0)
+    C = trajectory_cost(np.vstack([S, path]))
+    Q = path[-1]
+    V = lambda q: 0.5 * np.sum((goals - q) ** 2, axis=1)  # noqa: E731
+    unnorm = np.exp(-C - V(Q)) / np.exp(-V(S)) * prior
+    np.testing.assert_allclose(goal_posterior(Q, S, goals, prior), unnorm / unnorm.sum(), rtol=1e-12)
+
+
+def test_posterior_at_start_is_the_prior():
+    np.testing.assert_allclose(goal_posterior(S, S, GOALS, [0.3, 0.7]), [0.3, 0.7])
+
+
+def test_score_weights_integrate_f():
+    """Trapezoid weights of f(t) = T - t: they sum to one and give int t f / int f = T / 3."""
+    w = score_weights(1000, T=2.0)
+    t = np.linspace(0, 2.0, 1001)
+    assert w.sum() == pytest.approx(1.0)
+    assert w @ t == pytest.approx(2.0 / 3, rel=1e-5)
+    assert np.all(np.diff(w[1:-1]) < 0)      # earlier moments weigh more
+
+
+def test_score_gradient_matches_finite_differences():
+    rng = np.random.default_rng(1)
+    xs = np.linspace(S, GOALS[1], 21) + 0.1 * rng.normal(size=(21, 2))
+    xs[0], xs[-1] = S, GOALS[1]
+    grad = score_gradient(xs, GOALS, 1)
+    eps = 1e-6
+    fd = np.zeros_like(grad)
+    for k in range(1, 20):
+        for d in range(2):
+            plus, minus = xs.copy(), xs.copy()
+            plus[k, d] += eps
+            minus[k, d] -= eps
+            fd[k - 1, d] = (legibility_score(plus, GOALS, 1) - legibility_score(minus, GOALS, 1)) / (2 * eps)
+    np.testing.assert_allclose(grad, fd, atol=1e-8)
+
+
+@pytest.fixture(scope="module")
+def optimised():
+    return optimise_legibility(S, GOALS, 1, N=100, beta_ratio=1.5)
+
+
+def test_optimiser_improves_within_the_trust_region(optimised):
+    r = optimised
+    straight = np.linspace(S, GOALS[1], 101)
+    assert r.scores[-1] > legibility_score(straight, GOALS, 1) + 0.05
+    assert r.costs[-1] <= 1.5 * trajectory_cost(straight) * (1 + 1e-6)
+    np.testing.assert_allclose(r.xs[[0, -1]], [S, GOALS[1]])
+
+
+def test_optimiser_exaggerates_away_from_the_other_goal(optimised):
+    mid = optimised.xs[50]
+    assert mid[0] > 0.5 + 0.2          # bulges right of the straight line, away from G0 = (-1, 1)
+    np.testing.assert_allclose(mid[1], 0.5, atol=1e-6)   # symmetric goals: no vertical distortion
+
+
+def test_optimiser_is_mirror_symmetric(optimised):
+    left = optimise_legibility(S, GOALS, 0, N=100, beta_ratio=1.5)
+    np.testing.assert_allclose(left.xs * [-1, 1], optimised.xs, atol=1e-9)
+
+
+def test_trust_region_binds_the_result():
+    """A larger trust region allows a more legible (higher score) trajectory."""
+    small = optimise_legibility(S, GOALS, 1, N=60, beta_ratio=1.2)
+    large = optimise_legibility(S, GOALS, 1, N=60, beta_ratio=2.0)
+    assert large.scores[-1] > small.scores[-1]
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    (dict(goal_index=2), "goal_index"),
+    (dict(beta=0.5), "empty trust region"),
+    (dict(eta=0.0), "eta must be positive"),
+    (dict(N=1), "N must be"),
+])
+def test_bad_inputs(kwargs, match):
+    args = dict(start=S, goals=GOALS, goal_index=1)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        optimise_legibility(**args)
+    with pytest.raises(ValueError, match="goals must be"):
+        goal_posterior(S, S, GOALS[:1])
+
+
+def test_notebook_compares_both_measures(executed_notebook):
+    """The notebook scores both methods' trajectories by both measures; each method wins its own."""
+    res = executed_notebook("05_legibility_lqr")
+    assert res["c6-corollary-same-complexity"]["value"] is True

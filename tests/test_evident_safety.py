@@ -1,0 +1,149 @@
+"""Chapter 7: the Dubins integrator, the hypothesis costs, and iLQR's optima checked independently."""
+
+import jax
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from mutual import evident_safety as es
+from mutual.dubins import dubins_step as dubins_step_numpy
+from mutual.ilqr import ILQRError
+from mutual.legibility import single_integrator
+from mutual.legibility import solve as solve_riccati
+
+
+def test_dubins_step_integrates_eq_7_5_exactly_for_constant_turn_rates():
+    rng = np.random.default_rng(0)
+    for x0, u in [(rng.normal(size=3), 1.7), (rng.normal(size=3), 0.0), (rng.normal(size=3), -4.0)]:
+        ode = solve_ivp(lambda t, x: [3 * np.cos(x[2]), 3 * np.sin(x[2]), u], (0, 0.3), x0, rtol=1e-12, atol=1e-12)
+        with jax.enable_x64(True):
+            ours = np.asarray(es.dubins_step(x0, np.array([u]), 0.3))
+        np.testing.assert_allclose(ours, ode.y[:, -1], atol=1e-9)
+
+
+def test_dubins_step_agrees_with_chapter_5s_numpy_integrator():
+    rng = np.random.default_rng(1)
+    states, controls = rng.normal(size=(20, 3)), rng.normal(size=20)
+    with jax.enable_x64(True):
+        ours = np.array(jax.vmap(es.dubins_step, in_axes=(0, 0, None))(states, controls[:, None], 0.1))
+    theirs = dubins_step_numpy(states, controls, 0.1)
+    np.testing.assert_allclose(ours[:, :2], theirs[:, :2], atol=1e-12)
+    np.testing.assert_allclose(np.angle(np.exp(1j * ours[:, 2])), theirs[:, 2], atol=1e-12)
+
+
+def test_keep_out_penalty_and_hazard_term_closed_forms():
+    states = np.array([[0.0, 0.0], [3.0, 4.0]])
+    p = np.array([0.0, 1.0])
+    expected = 1 / (1 + 1 / 0.25) + 1 / (1 + 18 / 0.25)
+    assert float(es.keep_out_penalty(p, states, 0.5)) == pytest.approx(expected, rel=1e-6)
+    assert float(es.keep_out_penalty(p, np.zeros((0, 2)), 0.5)) == 0.0
+    assert float(es.hazard_term(p, np.array([3.0, 5.0]))) == pytest.approx(25.0)
+
+
+def test_legible_cost_is_the_linear_combination_of_the_hypotheses():
+    """Eq. (6.15) on the feature cost: (1 + alpha) J1(u) - J0(u) for any controls."""
+    for figure in ("7.2", "6.1"):
+        task, w0, w1 = es.figure_scenario(figure, steps=30)
+        us = np.random.default_rng(2).normal(size=(30, 1))
+        J0, J1 = es.cost(task, w0, us), es.cost(task, w1, us)
+        legible = es.cost(task, es.legible_weights(w1, w0, 0.7), us)
+        assert legible == pytest.approx(1.7 * J1 - J0, rel=1e-12)
+
+
+def test_lq_form_of_figure_7_1_costs_matches_the_feature_costs():
+    """Chapter 6's QuadraticCost (numpy) and our JAX feature cost agree on random controls."""
+    task, w0, w1 = es.figure_scenario("7.1", steps=40)
+    us = np.random.default_rng(4).normal(size=(40, 2))
+    xs = task.x0 + task.dt * np.vstack([np.zeros(2), np.cumsum(us, axis=0)])
+    weights = es.hypothesis_set(w0, w1)
+    for name, cost in es.lq_hypothesis_costs(task, w0, w1).items():
+        assert cost.value(xs, us) == pytest.approx(es.cost(task, weights[name], us), rel=1e-12)
+
+
+def test_figure_7_1_ilqr_equals_chapter_6_riccati_solution_in_one_step():
+    task, w0, w1 = es.figure_scenario("7.1", steps=60)
+    results = es.solve_hypotheses(task, w0, w1)
+    for name, cost in es.lq_hypothesis_costs(task, w0, w1).items():
+        exact = solve_riccati(single_integrator(2, task.dt), cost, task.x0, task.steps)
+        assert results[name].iterations <= 2
+        np.testing.assert_allclose(results[name].xs, exact.xs, atol=1e-10)
+        assert results[name].cost == pytest.approx(cost.value(exact.xs, exact.us), rel=1e-10)
+
+
+def test_unbounded_legible_objective_is_reported_by_both_solvers():
+    """With a tiny alpha the hazard reward (1 + alpha) / alpha a3 beats the effort cost over T = 5."""
+    task, w0, w1 = es.figure_scenario("7.1", steps=60)
+    alpha = 0.02
+    with pytest.raises(ValueError, match="unbounded"):
+        solve_riccati(single_integrator(2, task.dt), es.lq_hypothesis_costs(task, w0, w1, alpha)["legible"],
+                      task.x0, task.steps)
+    with pytest.raises(ILQRError, match="unbounded"):
+        es.solve(task, es.legible_weights(w1, w0, alpha))
+
+
+@pytest.fixture(scope="module")
+def dubins():
+    task, w0, w1 = es.figure_scenario("7.2")
+    return task, w0, w1, es.solve_hypotheses(task, w0, w1)
+
+
+def test_dubins_optima_have_zero_gradient(dubins):
+    task, w0, w1, results = dubins
+    weights = es.hypothesis_set(w0, w1)
+    for name, r in results.items():
+        cost, grad = es.cost_gradient(task, weights[name], r.us)
+        assert cost == pytest.approx(r.cost, rel=1e-12)
+        assert np.abs(grad).max() < 1e-7 * (1 + abs(cost)), name
+
+
+def test_lbfgs_finds_nothing_better_near_ilqrs_dubins_optima(dubins):
+    task, w0, w1, results = dubins
+    weights = es.hypothesis_set(w0, w1)
+    for name, r in results.items():
+        tol = 1e-8 * (1 + abs(r.cost))
+        _, polished, _ = es.solve_lbfgs(task, weights[name], r.us)
+        assert polished >= r.cost - tol, name
+        us, scratch, _ = es.solve_lbfgs(task, weights[name])  # from rest, like iLQR
+        assert scratch >= r.cost - tol, name
+        if scratch <= r.cost + 1e-6 * (1 + abs(r.cost)):  # the same optimum, then the same controls
+            np.testing.assert_allclose(us, r.us, atol=1e-3)
+        rng = np.random.default_rng(3)
+        for _ in range(5):  # random nearby controls are never better
+            assert es.cost(task, weights[name], r.us + 1e-3 * rng.normal(size=r.us.shape)) > r.cost
+
+
+def test_dubins_story_h1_slightly_farther_legible_obviously_farther(dubins):
+    task, _, _, results = dubins
+    d = {k: es.distance_to_point(r.xs, task.hazard, task.dt) for k, r in results.items()}
+    assert d["H0"]["integral"] < d["H1"]["integral"] < 1.05 * d["H0"]["integral"]
+    assert d["legible"]["integral"] > 1.3 * d["H1"]["integral"]
+    assert d["legible"]["min"] > 1.5 * d["H1"]["min"]
+
+
+def test_distance_to_point_closed_form():
+    t = np.linspace(0, 2, 201)
+    xs = np.c_[t - 1, np.ones_like(t)]  # the line y = 1 from x = -1 to 1, unit speed
+    d = es.distance_to_point(xs, [0, 0], dt=0.01)
+    assert d["min"] == pytest.approx(1.0)
+    assert d["integral"] == pytest.approx(np.arcsinh(1) + np.sqrt(2), rel=1e-5)  # int sqrt(1 + s^2) ds
+
+
+def test_task_validation_names_the_argument():
+    with pytest.raises(ValueError, match="x0"):
+        es.EvidentSafetyTask(x0=[0, 0, 0, 0], goal=[1, 1])
+    with pytest.raises(ValueError, match="goal"):
+        es.EvidentSafetyTask(x0=[0, 0], goal=[1, 1, 1])
+    with pytest.raises(ValueError, match="keep_out"):
+        es.EvidentSafetyTask(x0=[0, 0], goal=[1, 1], keep_out=[[0, 0, 0]])
+    with pytest.raises(ValueError, match="weights"):
+        es.EvidentSafetyTask(x0=[0, 0], goal=[1, 1]).params([1, 2])
+    with pytest.raises(ValueError, match="figure"):
+        es.figure_scenario("9.9")
+
+
+def test_notebook_reproduces_the_chapter(executed_notebook):
+    claims = executed_notebook("06_evident_safety")
+    for cid in ("c7-fig71-settings", "c7-fig71-legible-demonstrates-correction", "c7-fig72-settings",
+                "c7-ilqr-converges", "c7-fig72-h1-integral-farther", "c7-fig72-h1-only-slightly",
+                "c7-fig72-legible-obvious", "c7-ilqr-same-complexity"):
+        assert claims[cid]["value"] is True, cid

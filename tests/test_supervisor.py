@@ -1,0 +1,165 @@
+"""The noisy idealized supervisor, its maximum-likelihood fit, the safety controller and the CSV."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from mutual.dubins import keep_out_margin
+from mutual.reachability import QUICK_GRID, value_library
+from mutual.supervisor import (NoisySupervisor, approach_scenes, filter_control, fit_supervisor, gaussian_mle,
+                               intervention_states, read_interventions, safety_controller, simulate_filtered,
+                               validate_interventions, write_interventions)
+
+W_MAXES = 0.25 * np.arange(1, 13)
+RADIUS = 1.0
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MUTUAL_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "reachability-cache"))
+        return value_library(W_MAXES, RADIUS, QUICK_GRID, progress=False)
+
+
+def _interventions(library, w_max, mu, sigma, n, seed):
+    rng = np.random.default_rng(seed)
+    sup = NoisySupervisor(library[library.index_of(w_max)], mu, sigma)
+    states, _ = sup.first_interventions(approach_scenes(n, rng, RADIUS, 7.5), rng)
+    return states
+
+
+def test_gaussian_mle_matches_scipy():
+    x = np.random.default_rng(0).normal(0.4, 0.3, size=(3, 25))
+    mu, sigma, loglik = gaussian_mle(x)
+    for row, m, s, ll in zip(x, mu, sigma, loglik):
+        m_ref, s_ref = stats.norm.fit(row)  # the MLE (population variance)
+        assert m == pytest.approx(m_ref) and s == pytest.approx(s_ref)
+        assert ll == pytest.approx(stats.norm.logpdf(row, m_ref, s_ref).sum())
+
+
+def test_fit_equals_its_closed_form(library):
+    states = _interventions(library, 0.75, 0.5, 0.05, 30, seed=1)
+    fit = fit_supervisor(library, states)
+    values = np.stack([vf.interp(states) for vf in library])
+    mu, sigma, loglik = gaussian_mle(values)
+    assert np.allclose(fit.mus, mu) and np.allclose(fit.sigmas, sigma) and np.allclose(fit.logliks, loglik)
+    assert fit.index == np.argmax(loglik) and fit.w_max == W_MAXES[fit.index]
+    assert fit.level(2.0) == pytest.approx(fit.mu + 2 * fit.sigma)
+
+
+@pytest.mark.parametrize("w_max", [0.5, 0.75, 1.0])
+def test_argmax_recovers_the_generating_member(library, w_max):
+    for seed in range(4):
+        fit = fit_supervisor(library, _interventions(library, w_max, 0.5, 0.02, 40, seed))
+        assert fit.w_max == w_max, seed
+        assert fit.mu == pytest.approx(0.5, abs=0.03)
+        assert fit.sigma == pytest.approx(0.02, abs=0.02)
+
+
+def test_intervention_values_follow_the_noise_model(library):
+    vf = library[library.index_of(0.75)]
+    states = _interventions(library, 0.75, 0.5, 0.2, 400, seed=5)
+    values = vf.interp(states)
+    assert len(values) > 380
+    assert stats.kstest(values, stats.norm(0.5, 0.2).cdf).pvalue > 1e-3
+
+
+def test_map_prior_excludes_agile_members_and_clips_mu(library):
+    states = _interventions(library, 2.0, -0.1, 0.02, 40, seed=0)
+    mle = fit_supervisor(library, states)
+    assert mle.w_max > 1.0 and mle.mu < 0
+    fit = fit_supervisor(library, states, prior="map")
+    assert np.array_equal(fit.admissible, W_MAXES <= 1.0)
+    assert fit.w_max <= 1.0 and fit.mu >= 0
+    assert np.all(np.isneginf(fit.logliks[~fit.admissible]))
+    values = library[fit.index].interp(states)
+    mu = max(values.mean(), 0.0)
+    assert fit.sigma == pytest.approx(np.sqrt(np.mean((values - mu) ** 2)))
+
+
+def test_fit_rejects_degenerate_data(library):
+    good = _interventions(library, 1.0, 0.5, 0.1, 10, seed=0)
+    with pytest.raises(ValueError, match="at least two"):
+        fit_supervisor(library, good[:1])
+    with pytest.raises(ValueError, match="NaN"):
+        fit_supervisor(library, np.vstack([good, [[np.nan, 0.0, 0.0]]]))
+    with pytest.raises(ValueError, match="outside"):
+        fit_supervisor(library, np.vstack([good, [[20.0, 0.0, 0.0]]]))
+    with pytest.raises(ValueError, match="zero variance"):
+        fit_supervisor(library, np.repeat(good[:1], 5, axis=0))
+    with pytest.raises(ValueError, match="prior"):
+        fit_supervisor(library, good, prior="flat")
+    with pytest.raises(ValueError, match="shape"):
+        fit_supervisor(library, good[:, :2])
+
+
+def test_alpha_mu_plus_two_sigma_avoids_over_97_percent_of_interventions(library):
+    states = _interventions(library, 0.75, 0.5, 0.1, 600, seed=7)
+    fit = fit_supervisor(library, states)
+    below = fit.value_fn.interp(states) <= fit.level(2.0)
+    assert below.mean() > 0.97
+
+
+def test_filter_keeps_robots_out_of_k_and_above_the_level(library):
+    vf = library[library.index_of(0.75)]
+    rng = np.random.default_rng(4)
+    scenes = approach_scenes(60, rng, RADIUS, 7.0)
+    start = scenes[:, 0]
+    controller = safety_controller(vf, alpha=0.5, u_max=1.0)  # a robot more agile than the model
+    path = simulate_filtered(controller, start, 0.0, duration=6.0)
+    assert keep_out_margin(path, RADIUS).min() > 0
+    # robots only dip below alpha by the discretisation of the switching
+    assert np.nanmin(vf.interp(path.reshape(-1, 3))) > 0.5 - 0.3
+    # far from the level the nominal control passes unchanged
+    far = np.array([[7.5, 7.5, 0.0], [-7.0, 0.0, np.pi]])
+    assert np.all(filter_control(vf, far, 0.3, alpha=0.5) == 0.3)
+
+
+def test_filter_with_obstacles_uses_the_closest_obstacle(library):
+    vf = library[library.index_of(1.0)]
+    obstacles = np.array([[0.0, 0.0], [30.0, 0.0]])
+    robots = np.array([[27.5, 0.0, 0.0], [-2.5, 0.0, 0.0], [15.0, 0.0, 0.0]])
+    u = filter_control(vf, robots, 0.0, alpha=0.2, obstacles=obstacles)
+    rel = robots[:2] - np.array([[30.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    assert np.array_equal(u[:2], vf.safe_control(rel)) and np.all(u[:2] != 0)
+    assert u[2] == 0.0
+
+
+def test_supervisor_intervenes_at_its_level(library):
+    vf = library[library.index_of(1.0)]
+    sup = NoisySupervisor(vf, mu=0.5, sigma=0.0)
+    states = np.array([[-3.0, 0.0, 0.0], [-7.0, 0.0, 0.0], [3.0, 0.0, 0.0], [30.0, 0.0, 0.0]])
+    expected = vf.interp(states, fill_value=np.inf) <= 0.5
+    assert np.array_equal(sup.intervenes(states, np.random.default_rng(0)), expected)
+    with pytest.raises(ValueError, match="sigma"):
+        NoisySupervisor(vf, 0.5, -1.0)
+    with pytest.raises(ValueError, match="rng"):
+        sup.intervenes(states)
+
+
+def test_interventions_csv_round_trip_and_validation(tmp_path):
+    frame = pd.DataFrame({"participant": ["P01", "P01", "P02"], "trial": [0, 1, 0], "time": [1.5, 2.0, 0.7],
+                          "x": [-3.0, -2.0, 1.0], "y": [0.5, 0.0, -2.0], "theta": [0.1, 7.0, -1.0],
+                          "obstacle_x": [1.0, 0.0, 0.0]})
+    path = write_interventions(frame, tmp_path / "interventions.csv")
+    back = read_interventions(path)
+    assert list(back.columns) == ["participant", "trial", "time", "x", "y", "theta", "obstacle_x", "obstacle_y"]
+    assert back["theta"].between(-np.pi, np.pi).all()
+    assert np.allclose(intervention_states(back)[0], [-4.0, 0.5, 0.1])
+    for broken, match in [(frame.drop(columns="theta"), "lack"), (frame.assign(extra=1), "unknown"),
+                          (frame.assign(trial=[0, 1.5, 2]), "trial"), (frame.assign(x=[0, np.nan, 1]), "'x'"),
+                          (frame.assign(time=[-1, 0, 0]), "time")]:
+        with pytest.raises(ValueError, match=match):
+            validate_interventions(broken)
+
+
+def test_notebook_recovers_the_supervisor(executed_notebook):
+    results = executed_notebook("03_hji_safe_sets")
+    values = {k: v["value"] for k, v in results.items()}
+    assert values, "the notebook wrote no results"
+    for key, value in values.items():
+        if isinstance(value, bool):
+            assert value, key
+    assert abs(values["c4-fit-recovers-wmax"] - 0.75) <= 0.25
+    assert values["c4-alpha-2sigma-avoids-97pct"] > 0.95

@@ -1,0 +1,108 @@
+"""The simulated teaming study (chapter 5) on the chapter 4 value functions (quick grid)."""
+
+import numpy as np
+import pytest
+
+from mutual.study_data import validate_trials
+from mutual.study_design import TREATMENTS
+from mutual.supervisor import NoisySupervisor, fit_supervisor
+from mutual.teaming import (Team, TeamingConfig, fraction_inside, learned_is_conservative, phase2_interventions,
+                            predicted_and_observed, simulate_study, simulate_teaming, study_value_functions)
+
+
+@pytest.fixture(scope="module")
+def functions():
+    return study_value_functions(quick=True)
+
+
+def _member(library, w):
+    return library[library.index_of(w)]
+
+
+@pytest.mark.parametrize("w", [0.5, 1.0])
+def test_perfect_fit_without_noise_has_no_false_positives(functions, w):
+    # Property of Sec. 4.5: robots avoiding at the supervisor's own safe set never draw a false
+    # positive from a noiseless idealized supervisor. In discrete time on the quick grid the
+    # controller needs a margin covering the grid value's error along the avoid arc (~0.4 here).
+    library, conservative = functions
+    own = _member(library, w)
+    sup = NoisySupervisor(own, 0.5, 0.0)
+    standard = _member(library, 1.0)
+    teams = [Team(own, 0.5), Team(standard, 0.0)] * 4
+    out = simulate_teaming(teams, [sup] * 8, [1, 2, 3, 4] * 2, TeamingConfig(duration=40, filter_margin=0.5), seed=2)
+    learned, std = out.iloc[0::2], out.iloc[1::2]
+    assert learned["false_positives"].sum() == 0
+    assert learned["interventions"].sum() > 0          # undetected obstacles are still caught
+    assert std["false_positives"].sum() > 0            # the Standard team alarms this supervisor
+
+
+def test_half_of_noisy_interventions_lie_in_the_learned_set(functions):
+    library, _ = functions
+    rng = np.random.default_rng(4)
+    sup = NoisySupervisor(_member(library, 0.5), 0.3, 0.05)
+    table = phase2_interventions(sup, 400, rng)
+    states = table[["x", "y", "theta"]].to_numpy()
+    fit = fit_supervisor(library, states)
+    frac, _ = fraction_inside(fit.value_fn, states, fit.mu)
+    assert frac == pytest.approx(0.5, abs=0.08)
+    true_frac, _ = fraction_inside(sup.value_fn, states, sup.mu)
+    assert true_frac == pytest.approx(0.5, abs=0.08)
+    assert fit.w_max == 0.5
+
+
+def test_detection_probability_and_safety_without_supervisor(functions):
+    library, conservative = functions
+    standard = _member(library, 1.0)
+    never = NoisySupervisor(standard, -50.0, 0.0)          # never intervenes
+    # seeing every obstacle, robots never crash (a margin covers the quick grid's value error)
+    cfg = TeamingConfig(duration=40, detection_prob=1.0, filter_margin=0.5)
+    out = simulate_teaming([Team(standard, 0.0), Team(conservative, 0.0)] * 2, [never] * 4, [1, 2, 3, 4], cfg, seed=0)
+    assert out["collisions"].sum() == 0 and out["interventions"].sum() == 0
+    assert (out["trips"] > 0).all()
+    out = simulate_teaming([Team(standard, 0.0)] * 6, [never] * 6, [1, 2, 3, 4, 5, 6],
+                           TeamingConfig(duration=40), seed=0)
+    rate = out["detected_encounters"].sum() / out["encounters"].sum()
+    assert rate == pytest.approx(0.8, abs=0.05)
+    assert out["collisions"].sum() > 0                      # blind robots crash without a supervisor
+    assert np.allclose(out["score"], out["trips"] - out["collisions"] - 0.5 * out["interventions"])
+
+
+def test_exclusion_rule(functions):
+    library, _ = functions
+    standard = _member(library, 1.0)
+    assert learned_is_conservative(standard, 0.2, standard)
+    assert learned_is_conservative(_member(library, 0.5), 0.2, standard)
+    assert not learned_is_conservative(_member(library, 2.0), 0.0, standard)
+
+
+def test_study_tables_follow_the_schema(functions):
+    library, conservative = functions
+    kinds = ("standard-like", "conservative-like", "gradual", "agile")
+    study = simulate_study(library, conservative, n_scenes=20, config=TeamingConfig(duration=20), seed=1, kinds=kinds)
+    validate_trials(study.trials)
+    assert study.simulated
+    analysed = set(study.trials["participant"])
+    assert analysed == set(study.participants.loc[~study.participants["excluded"], "participant"])
+    assert "P04" not in analysed                            # the agile recruit is excluded
+    table = predicted_and_observed(study)
+    assert list(table["safe set"]) == list(TREATMENTS)
+    assert table["predicted F.P. vs Std."].iloc[0] == 1.0
+
+
+def test_bad_arguments(functions):
+    library, _ = functions
+    with pytest.raises(ValueError, match="equally long"):
+        simulate_teaming([Team(library[0])], [], [1])
+    with pytest.raises(ValueError, match="detection_prob"):
+        TeamingConfig(detection_prob=1.5)
+    with pytest.raises(ValueError, match="alpha"):
+        Team(library[0], float("nan"))
+
+
+def test_notebook_results(executed_notebook):
+    res = executed_notebook("04_user_study")
+    assert res["c5-latin-square-balanced"]["value"] is True
+    assert res["c5-tukey-learned-standard-p-from-table"]["value"] == pytest.approx(0.0328, abs=0.002)
+    assert res["c5-learned-half-in-safe-set"]["simulated"]
+    assert 0.3 < res["c5-learned-half-in-safe-set"]["value"] < 0.7
+    assert res["c5-detection-probability"]["value"] == pytest.approx(0.8, abs=0.05)
