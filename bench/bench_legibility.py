@@ -5,27 +5,15 @@ Reference case: x_{k+1} = x_k + dt u_k, dt = 0.01, N = 100, eq. (6.17) with g0 =
 g1 = (1, 1), start at the origin; legible objective (1 + alpha) J1 - J0 with alpha = 1.
 """
 
-import time
-
 import numpy as np
 
 from mutual import dragan_legibility as ds
 from mutual import legibility as leg
+from mutual.complexity import best_time
 
 DT, N = 0.01, 100
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])
 X0 = np.zeros(2)
-
-
-def best_time(fn, repeats):
-    """Best wall time of ``repeats`` calls of ``fn`` (after one warm-up call)."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def dragan_iterations_to_best(goals, beta_ratio, rel_tol=1e-4):

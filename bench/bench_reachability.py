@@ -18,7 +18,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mutual import reachability
+from mutual import reachability, supervisor
 from mutual.dubins import DubinsCar
 from mutual.reachability import FULL_GRID, QUICK_GRID, SolverSpec, _initial_values, value_library
 from mutual.supervisor import NoisySupervisor, approach_scenes, fit_supervisor
@@ -101,7 +101,10 @@ def run(quick=False):
             approach_scenes(60, rng, RADIUS, 7.5), rng)
         reference = library[int(np.argmin(np.abs(w_maxes - 1.0)))]  # the member nearest the true robot
         for prior in ("mle", "map"):
-            fit = _best(lambda: fit_supervisor(library, states[:40], prior=prior, reference=reference), 5)
+            def fit_once():
+                supervisor._conservative_members.cache_clear()  # MAP: include the prior's containment checks
+                fit_supervisor(library, states[:40], prior=prior, reference=reference)
+            fit = _best(fit_once, 5)
             rows.append({"benchmark": "fit one supervisor", "case": f"{prior}, 40 interventions, {shape}",
                          "seconds": fit, "baseline": "", "baseline_seconds": None, "target": "< 0.1 s",
                          "met": fit < 0.1})

@@ -6,21 +6,10 @@ Full: the 101x101x64 grid, 12 recruits x 40 scenes, 60 s trials (66 trials of 5 
 Quick: the 41x41x24 grid, 20 s trials. The library is computed (or loaded) before timing.
 """
 
-import time
-
 from mutual import study_stats as st
 from mutual import teaming as tm
+from mutual.complexity import best_time
 from mutual.study_design import TREATMENTS
-
-
-def best_time(fn, repeats):
-    """Best wall time of ``repeats`` calls of ``fn``."""
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def _statistics(trials):
