@@ -19,21 +19,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from mutual import reachability, supervisor
+from mutual.complexity import best_time
 from mutual.dubins import DubinsCar
 from mutual.reachability import FULL_GRID, QUICK_GRID, SolverSpec, _initial_values, value_library
 from mutual.supervisor import NoisySupervisor, approach_scenes, fit_supervisor
 
 RADIUS = 1.0
 W_MAXES = np.linspace(0.25, 3.0, 13)
-
-
-def _best(fn, repeats):
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def _fresh_call_per_member(w_maxes, grid_spec, solver):
@@ -91,7 +83,7 @@ def run(quick=False):
                      "seconds": cold, "baseline": "one fresh hj.step call per member",
                      "baseline_seconds": fresh, "target": "<= 120 s on 2 cores (13 members)", "met": cold <= 120 * len(w_maxes) / 13})
 
-        warm = _best(lambda: value_library(w_maxes, RADIUS, grid, solver, progress=False), 3)
+        warm = best_time(lambda: value_library(w_maxes, RADIUS, grid, solver, progress=False), 3)
         rows.append({"benchmark": f"reachability library ({members}, warm)", "case": f"{shape}, disk cache",
                      "seconds": warm, "baseline": "", "baseline_seconds": None, "target": "< 1 s", "met": warm < 1})
 
@@ -104,7 +96,7 @@ def run(quick=False):
             def fit_once():
                 supervisor._conservative_members.cache_clear()  # MAP: include the prior's containment checks
                 fit_supervisor(library, states[:40], prior=prior, reference=reference)
-            fit = _best(fit_once, 5)
+            fit = best_time(fit_once, 5)
             rows.append({"benchmark": "fit one supervisor", "case": f"{prior}, 40 interventions, {shape}",
                          "seconds": fit, "baseline": "", "baseline_seconds": None, "target": "< 0.1 s",
                          "met": fit < 0.1})
@@ -118,8 +110,8 @@ def _interp_row(vf, rng, n=1000):
     grid, values = vf.grid_spec.build(), jnp.asarray(vf.values)
     hj_interp = jax.jit(jax.vmap(grid.interpolate, in_axes=(None, 0)))
     hj_interp(values, jnp.asarray(states)).block_until_ready()
-    ours = _best(lambda: vf.interp(states), 20)
-    theirs = _best(lambda: np.asarray(hj_interp(values, jnp.asarray(states))), 20)
+    ours = best_time(lambda: vf.interp(states), 20)
+    theirs = best_time(lambda: np.asarray(hj_interp(values, jnp.asarray(states))), 20)
     return {"benchmark": "interpolate V at robot states", "case": f"{n} states, numpy trilinear",
             "seconds": ours, "baseline": "hj Grid.interpolate (jit + vmap)", "baseline_seconds": theirs,
             "target": "", "met": None}
@@ -130,9 +122,9 @@ def _vmap_row(w_maxes):
     with _private_cache():
         for batch in ("vmap", "loop"):  # compile for these shapes first
             value_library(w_maxes, RADIUS, QUICK_GRID, batch=batch, cache=False, progress=False)
-        vmap = _best(lambda: value_library(w_maxes, RADIUS, QUICK_GRID, batch="vmap", cache=False,
+        vmap = best_time(lambda: value_library(w_maxes, RADIUS, QUICK_GRID, batch="vmap", cache=False,
                                            progress=False), 1)
-        loop = _best(lambda: value_library(w_maxes, RADIUS, QUICK_GRID, cache=False, progress=False), 1)
+        loop = best_time(lambda: value_library(w_maxes, RADIUS, QUICK_GRID, cache=False, progress=False), 1)
     shape = "x".join(map(str, QUICK_GRID.shape))
     return {"benchmark": f"reachability library ({len(w_maxes)} members, compiled)", "case": f"{shape}, vmap over w_max",
             "seconds": vmap, "baseline": "loop over members", "baseline_seconds": loop, "target": "",

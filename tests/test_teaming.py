@@ -3,10 +3,11 @@
 import numpy as np
 import pytest
 
+from mutual.reachability import unsafe_set_contains
 from mutual.study_data import validate_trials
 from mutual.study_design import TREATMENTS
 from mutual.supervisor import NoisySupervisor, fit_supervisor
-from mutual.teaming import (Team, TeamingConfig, fraction_inside, learned_is_conservative, phase2_interventions,
+from mutual.teaming import (Team, TeamingConfig, fraction_inside, phase2_interventions,
                             predicted_and_observed, simulate_study, simulate_teaming, study_value_functions)
 
 
@@ -70,9 +71,9 @@ def test_detection_probability_and_safety_without_supervisor(functions):
 def test_exclusion_rule(functions):
     library, _ = functions
     standard = _member(library, 1.0)
-    assert learned_is_conservative(standard, 0.2, standard)
-    assert learned_is_conservative(_member(library, 0.5), 0.2, standard)
-    assert not learned_is_conservative(_member(library, 2.0), 0.0, standard)
+    assert unsafe_set_contains(standard, standard, level=0.2)
+    assert unsafe_set_contains(_member(library, 0.5), standard, level=0.2)
+    assert not unsafe_set_contains(_member(library, 2.0), standard, level=0.0)
 
 
 def test_study_tables_follow_the_schema(functions):

@@ -32,7 +32,8 @@ from .study_design import TREATMENTS, study_design
 from .study_data import OBJECTIVE_MEASURES, TRIAL_COLUMNS, validate_trials
 
 from .dubins import SPEED, TRUE_W_MAX, dubins_step
-from .reachability import FULL_GRID, QUICK_GRID, ValueFunction, avoid_value_function, value_library
+from .reachability import (FULL_GRID, QUICK_GRID, ValueFunction, avoid_value_function, unsafe_set_contains,
+                           value_library)
 from .supervisor import NoisySupervisor, approach_scenes, fit_supervisor, validate_interventions
 
 OBSTACLE_RADIUS = 1.0
@@ -169,17 +170,6 @@ def fraction_inside(value, states, level=0.0):
     """(fraction, count) of ``states`` inside the safe set ``{V >= level}`` (Table 5.1 left; Fig. 5.6)."""
     v = value.interp(states, fill_value=np.inf)
     return float(np.mean(v >= level)), int(np.sum(v >= level))
-
-
-def learned_is_conservative(learned, alpha, standard, tolerance=0.0):
-    """Exclusion rule of Sec. 5.2.1: ``{V_learned < alpha}`` must contain ``{V_standard < 0}``.
-
-    Checked on the shared grid nodes, up to ``tolerance`` in value (the level-``alpha`` version of
-    :func:`mutual.reachability.unsafe_set_contains`, which checks level 0 with a one-cell tolerance).
-    """
-    if learned.grid_spec != standard.grid_spec:
-        raise ValueError("learned and standard must share one grid_spec")
-    return bool(np.all(learned.values[standard.values < 0] < alpha + tolerance))
 
 
 # ----------------------------------------------------------------------------- Phase III
@@ -462,7 +452,8 @@ def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), s
     """Simulate Phase II and Phase III for recruits of ``kinds`` (Sec. 5.2), all trials in one batch.
 
     Phase II: ``n_scenes`` approaches per recruit; the Learned set is the MLE fit (eq. 4.12,
-    ``alpha = mu*``); recruits failing :func:`learned_is_conservative` are excluded. Phase III:
+    ``alpha = mu*``); recruits whose Learned unsafe set ``{V < mu*}`` does not contain the Standard one
+    (:func:`mutual.reachability.unsafe_set_contains` at ``level = mu*``) are excluded. Phase III:
     the design of :func:`mutual.study_design.study_design` for all recruits, run for those
     who remain (Standard: ``w_max = 1``, ``alpha = 0``; Learned: the fit; Conservative:
     obstacle doubled, ``alpha = 0``); the supervisor is the recruit's own noisy model.
@@ -479,7 +470,7 @@ def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), s
         fit = fit_supervisor(library, states, prior="mle")
         fits[pid] = fit
         extra.append((len(table), fit.w_max, fit.mu, fit.sigma,
-                      not learned_is_conservative(fit.value_fn, fit.mu, standard)))
+                      not unsafe_set_contains(fit.value_fn, standard, level=fit.mu)))
         tables.append(table)
     people[["n_interventions", "w_max_hat", "mu_hat", "sigma_hat", "excluded"]] = pd.DataFrame(extra)
     interventions = validate_interventions(pd.concat(tables, ignore_index=True)[
