@@ -47,12 +47,13 @@ $(READY): environment.lock pyproject.toml
 	$(BIN)/python -m ipykernel install --sys-prefix --name mutual --display-name "Python (mutual)"
 	@touch $@
 
-## lock: recompile environment.lock from requirements.in (pins and hashes, Python 3.11)
+## lock: recompile environment.lock from requirements.in (pins and hashes, Python 3.11);
+##       keeps current pins where they still fit; `make lock LOCKFLAGS=--upgrade` upgrades all
 lock:
 	@test -x build/lock-tools/bin/pip-compile || \
 		($(PYTHON) -m venv build/lock-tools && build/lock-tools/bin/pip install -q pip-tools)
 	build/lock-tools/bin/pip-compile --generate-hashes --allow-unsafe --strip-extras \
-		--no-emit-index-url --upgrade -o environment.lock requirements.in
+		--no-emit-index-url $(LOCKFLAGS) -o environment.lock requirements.in
 
 ## clean: remove executed notebooks, caches and build products (keeps the environment)
 clean:

@@ -2,7 +2,8 @@
 legible objective's iteration count against the plain ones.
 
 Both solvers use the same jit-compiled objective (L-BFGS also its autodiff gradient), start from
-rest, and are timed warm (compilation excluded), best of a few repeats, side by side.
+rest, and are timed warm (compilation excluded), best of a few repeats, side by side; each row
+gives both final costs.
 """
 
 import time
@@ -39,8 +40,9 @@ def run(quick=False):
         equal = abs(cost - result.cost) <= 1e-6 * (1 + abs(result.cost))
         iterations[name], seconds[name] = result.iterations, t_ilqr
         rows.append({
-            "benchmark": "ilqr", "case": f"Dubins Fig. 7.2 {name}, N=100: iLQR {result.iterations} it, "
-                                         f"L-BFGS {res.nit} it / {res.nfev} evals, costs equal: {equal}",
+            "benchmark": "ilqr", "case": f"Dubins Fig. 7.2 {name}, N=100: iLQR {result.iterations} it, cost {result.cost:.12g}; "
+                                         f"L-BFGS {res.nit} it / {res.nfev} evals, cost {cost:.12g}; "
+                                         f"costs equal: {equal}",
             "seconds": t_ilqr, "baseline": "scipy L-BFGS single shooting (same JAX objective + gradient)",
             "baseline_seconds": t_lbfgs, "target": f"iLQR >= {SPEEDUP_TARGET:g}x faster at equal cost",
             "met": bool(equal and t_lbfgs >= SPEEDUP_TARGET * t_ilqr)})

@@ -44,6 +44,15 @@ def test_lq_problem_converges_in_one_step_to_the_riccati_solution():
     np.testing.assert_allclose(result.K, exact.K, atol=1e-8)  # the feedback gains of the Riccati pass
 
 
+@pytest.mark.parametrize("m", [3, 6])  # Q_uu factorised by unrolled arithmetic (m <= 4) and by LAPACK
+def test_lq_problems_with_more_controls_match_the_riccati_solution(m):
+    A, B, Q, R, QN, q, qN, x0, N = _random_lq(seed=4, n=7, m=m, N=15)
+    result = ilqr(*_lq_callables(A, B, Q, R, QN, q, qN), x0, np.zeros((N, m)))
+    exact = solve_lq(A, B, Q, R, x0, N, q=q, QN=QN, qN=qN)
+    np.testing.assert_allclose(result.us, exact.us, atol=1e-9)
+    np.testing.assert_allclose(result.K, exact.K, atol=1e-8)
+
+
 def test_indefinite_but_bounded_lq_problem_is_solved_exactly():
     """A negative state weight (as in (1 + alpha) J1 - J0) that the control cost still dominates."""
     A, B, Q, R, QN, q, qN, x0, N = _random_lq(seed=1, N=10)

@@ -6,20 +6,24 @@ The problem, with ``x_0`` given and the horizon ``N`` set by the control sequenc
     s.t.   x_{k+1} = dynamics(x_k, u_k, params)
 
 The three callables are written with ``jax.numpy``; their derivatives come from
-JAX autodiff (exact, no finite differences) and every step of the algorithm is
-jit-compiled once per set of callables (``params`` is traced, so a family of
-problems shares one compilation). All arithmetic is float64.
+JAX autodiff (exact, no finite differences). The whole solve, every iteration and
+the final check, is one jit-compiled ``jax.lax.while_loop`` per set of callables
+(``params`` is traced, so a family of problems shares one compilation): no Python
+runs between iterations and the result reaches the host in one transfer. All
+arithmetic is float64.
 
 Each iteration linearises the dynamics and takes a second-order model of the cost
-along the current trajectory (Gauss-Newton: the dynamics' curvature is dropped;
-``second_order=True`` keeps it, which is full DDP as in Tassa et al. and converges
-faster when the cost-to-go gradient is large, e.g. for a goal just out of reach),
-runs the Riccati-like backward pass for an affine policy ``du = k + K dx``, and
-rolls the policy out with a backtracking line search (step sizes 1, 1/2, ..., 1/1024
-until the Armijo test passes, inside one compiled loop). Objectives need
-not be convex, e.g. the legible ``(1 + alpha) J1 - J0`` of eq. (6.15): the
-control block ``Q_uu`` of the model is regularised to ``Q_uu + mu I`` with the
-schedule of Tassa, Erez & Todorov (2012) whenever it is not positive definite.
+along the current trajectory (vmapped over the stages; Gauss-Newton: the dynamics'
+curvature is dropped; ``second_order=True`` keeps it, which is full DDP as in Tassa
+et al. and converges faster when the cost-to-go gradient is large, e.g. for a goal
+just out of reach), runs the Riccati-like backward pass for an affine policy
+``du = k + K dx`` (a ``jax.lax.scan``), and rolls the policy out with a backtracking
+line search (step sizes 1, 1/2, ..., 1/1024 until the Armijo test passes; the first
+step is almost always accepted, so the trials run one after another rather than
+vmapped, which on a CPU would cost the work of all of them). Objectives need not be
+convex, e.g. the legible ``(1 + alpha) J1 - J0`` of eq. (6.15): the control block
+``Q_uu`` of the model is regularised to ``Q_uu + mu I`` with the schedule of Tassa,
+Erez & Todorov (2012) whenever it is not positive definite.
 
 An objective that is unbounded below, or a run that diverges, raises
 :class:`ILQRError` with the reason (regularisation exhausted, trajectory or cost
@@ -36,6 +40,11 @@ from jax.scipy.linalg import cho_solve
 
 STEP_SIZES = 0.5 ** np.arange(11)  # backtracking line search 1, 1/2, ..., 1/1024
 ARMIJO = 1e-4  # accept a step whose actual decrease is at least this fraction of the predicted one
+MU_MIN, DELTA0 = 1e-6, 2.0  # Tassa et al. (2012): smallest nonzero regularisation mu, growth factor of mu
+UNROLLED_CHOLESKY_MAX_M = 4  # up to this many controls, Q_uu is factorised by unrolled arithmetic (see _spd_solve)
+# how a solve ended (the status the compiled loop reports)
+RUNNING, CONVERGED, NONFINITE_START, INDEFINITE, NO_DECREASE, DIVERGED = range(6)
+SUMMARY = ("status", "steps", "grad", "size", "mu", "minimum")  # the scalars a solve returns
 
 
 class ILQRError(RuntimeError):
@@ -71,9 +80,44 @@ def _x64(fn):
     return wrapped
 
 
+def _spd_solve(A, B):
+    """``(A^-1 B, ok)`` by the Cholesky factorisation ``A = L L^T``; ``ok`` is False (and the
+    solution not finite) unless ``A`` (m, m) is positive definite, i.e. every pivot is > 0.
+
+    For ``m <= UNROLLED_CHOLESKY_MAX_M`` the Cholesky-Banachiewicz recursion and the two
+    triangular substitutions are unrolled into plain arithmetic at trace time: inside the
+    backward pass's scan this is several times faster on a CPU than LAPACK's ``potrf``
+    and ``trsm``, which are opaque calls with a fixed cost per stage. Larger ``m`` use LAPACK.
+    """
+    m = A.shape[-1]
+    if m > UNROLLED_CHOLESKY_MAX_M:
+        L = jnp.linalg.cholesky(A)  # NaN unless positive definite
+        return cho_solve((L, True), B), jnp.all(jnp.isfinite(L))
+    L, pivots = [], []  # L[i][j], j <= i, as scalars
+    for i in range(m):
+        row = []
+        for j in range(i):
+            row.append((A[i, j] - sum(row[p] * L[j][p] for p in range(j))) / L[j][j])
+        pivots.append(A[i, i] - sum(r * r for r in row))
+        row.append(jnp.sqrt(pivots[-1]))  # NaN for a negative pivot
+        L.append(row)
+    Y = []  # L Y = B
+    for i in range(m):
+        Y.append((B[i] - sum(L[i][p] * Y[p] for p in range(i))) / L[i][i])
+    X = [None] * m  # L^T X = Y
+    for i in reversed(range(m)):
+        X[i] = (Y[i] - sum(L[p][i] * X[p] for p in range(i + 1, m))) / L[i][i]
+    return jnp.stack(X), jnp.all(jnp.stack(pivots) > 0)
+
+
+def _where(flag, new, state):
+    """``new`` where ``flag`` holds, else the same entries of ``state`` (dicts of arrays)."""
+    return {key: jnp.where(flag, value, state[key]) for key, value in new.items()}
+
+
 @lru_cache(maxsize=64)
 def _kernels(dynamics, running_cost, terminal_cost):
-    """Jit-compiled rollout, cost, derivatives, backward pass and line search for one problem."""
+    """Jit-compiled rollout, single-shooting cost and gradient, and the whole iLQR solve for one problem."""
 
     def rollout(x0, us, params):
         def step(x, u):
@@ -95,10 +139,8 @@ def _kernels(dynamics, running_cost, terminal_cost):
         """Per-stage derivatives; ``second_order`` adds the dynamics' curvature (DDP)."""
         x, u = xs[:-1], us
         batch = dict(in_axes=(0, 0, None))
-        fx = jax.vmap(jax.jacfwd(dynamics, 0), **batch)(x, u, params)
-        fu = jax.vmap(jax.jacfwd(dynamics, 1), **batch)(x, u, params)
-        lx = jax.vmap(jax.grad(running_cost, 0), **batch)(x, u, params)
-        lu = jax.vmap(jax.grad(running_cost, 1), **batch)(x, u, params)
+        fx, fu = jax.vmap(jax.jacfwd(dynamics, (0, 1)), **batch)(x, u, params)
+        lx, lu = jax.vmap(jax.grad(running_cost, (0, 1)), **batch)(x, u, params)
         (lxx, _), (lux, luu) = jax.vmap(jax.hessian(running_cost, (0, 1)), **batch)(x, u, params)
         curvature = (jax.vmap(jax.hessian(dynamics, (0, 1)), **batch)(x, u, params) if second_order
                      else ((None, None), (None, None)))
@@ -124,10 +166,9 @@ def _kernels(dynamics, running_cost, terminal_cost):
             if second_order:
                 Qxx, Quu, Qux = (Q + jnp.tensordot(Vx, f, 1) for Q, f in ((Qxx, fxx), (Quu, fuu), (Qux, fux)))
             Quu = 0.5 * (Quu + Quu.T)
-            chol = jnp.linalg.cholesky(Quu + (mu + shift * (1.0 + jnp.max(jnp.abs(Quu)))) * jnp.eye(m))
-            ok = jnp.all(jnp.isfinite(chol))
-            k = -cho_solve((chol, True), Qu)
-            K = -cho_solve((chol, True), Qux)
+            gains, ok = _spd_solve(Quu + (mu + shift * (1.0 + jnp.max(jnp.abs(Quu)))) * jnp.eye(m),
+                                   -jnp.concatenate([Qu[:, None], Qux], axis=1))
+            k, K = gains[:, 0], gains[:, 1:]
             Vx = Qx + K.T @ Quu @ k + K.T @ Qu + Qux.T @ k
             Vxx = Qxx + K.T @ Quu @ K + K.T @ Qux + Qux.T @ K
             lam = lx + fx.T @ lam
@@ -163,22 +204,75 @@ def _kernels(dynamics, running_cost, terminal_cost):
         _, x_new, u_new, c_new, accept = jax.lax.while_loop(keep_going, body, first)
         return x_new, u_new, c_new, accept
 
-    def iterate(x0, xs, us, cost, params, mu, second_order):
-        """One iteration; the scalars come back together in one array (one host transfer)."""
-        model, terminal = quadratic_model(xs, us, params, second_order)
-        k, K, d1, d2, ok, grad = backward(model, terminal, mu, second_order)
-        x_new, u_new, c_new, accepted = line_search(x0, xs, us, cost, k, K, d1, d2, params)
-        size = jnp.maximum(jnp.max(jnp.abs(x_new)), jnp.max(jnp.abs(u_new)))
-        return x_new, u_new, K, jnp.stack([c_new, accepted & ok, ok, grad, size])
-
     def is_minimum(xs, us, params):
         """Whether the exact (DDP) ``Q_uu`` are all positive definite up to a relative 1e-8:
         the block factorisation of the Hessian of the cost in the controls, so True at a strict
         local minimum and False at a saddle or maximum."""
         return backward(*quadratic_model(xs, us, params, True), 0.0, True, shift=1e-8)[4]
 
-    return (jax.jit(rollout), jax.jit(total_cost), jax.jit(jax.value_and_grad(shooting_cost)),
-            jax.jit(iterate, static_argnames="second_order"), jax.jit(is_minimum))
+    def solve(x0, us, params, tol, second_order, max_iter):
+        """iLQR to convergence (see :func:`ilqr`) as one ``while_loop`` over backward passes.
+
+        ``tol`` holds ``grad_tol``, ``stall_tol``, ``reg_max`` and ``divergence_bound``. Returns
+        ``xs, us, K, costs`` (the accepted costs are ``costs[:steps + 1]``) and, in one array so
+        that they reach the host in one transfer, the scalars of ``SUMMARY``: the status (RUNNING
+        when ``max_iter`` passes ran out), the number of accepted steps, the last pass's largest
+        gradient entry, the size of the last step, ``mu``, and whether a converged point is a
+        local minimum.
+        """
+        xs = rollout(x0, us, params)
+        cost = total_cost(xs, us, params)
+        n, m = xs.shape[1], us.shape[1]
+        count, real = jnp.zeros((), jnp.int32), jnp.zeros(())
+        start = dict(xs=xs, us=us, K=jnp.zeros((us.shape[0], m, n)), cost=cost,
+                     costs=jnp.full(max_iter + 1, jnp.nan).at[0].set(cost), steps=count, passes=count,
+                     mu=real, delta=real + 1.0, grad=real + jnp.nan, size=real,
+                     status=jnp.where(jnp.isfinite(cost), RUNNING, NONFINITE_START).astype(jnp.int32))
+
+        def no_step(x0, xs, us, cost, *_):
+            return xs, us, cost, jnp.zeros((), bool)
+
+        def iteration(s):
+            """One backward pass and, unless it stops the solve, a line search (Todorov & Li 2005)."""
+            k, K, d1, d2, pd, grad = backward(*quadratic_model(s["xs"], s["us"], params, second_order),
+                                              s["mu"], second_order)
+            scale = 1 + jnp.abs(s["cost"])
+            stationary = pd & (grad <= tol["grad_tol"] * scale)
+            x_new, u_new, c_new, found = jax.lax.cond(pd & ~stationary, line_search, no_step,
+                                                      x0, s["xs"], s["us"], s["cost"], k, K, d1, d2, params)
+            accepted = found & pd & ~stationary
+            # Tassa et al. (2012): a rejected pass raises mu (and its growth), an accepted one lowers them
+            delta_up = jnp.maximum(DELTA0, s["delta"] * DELTA0)
+            mu_up = jnp.maximum(MU_MIN, s["mu"] * delta_up)
+            delta_down = jnp.minimum(1 / DELTA0, s["delta"] / DELTA0)
+            mu_down = jnp.where(s["mu"] * delta_down > MU_MIN, s["mu"] * delta_down, 0.0)
+            size = jnp.max(jnp.stack([jnp.max(jnp.abs(x_new)), jnp.max(jnp.abs(u_new)), jnp.abs(c_new)]))
+            new_scale = 1 + jnp.abs(c_new)
+            stalled = ((s["cost"] - c_new <= tol["stall_tol"] * new_scale)
+                       & (grad <= 1e3 * tol["grad_tol"] * new_scale))
+            status = jnp.select(
+                [stationary,
+                 ~accepted & (mu_up > tol["reg_max"]),
+                 accepted & ~(size <= tol["divergence_bound"]),  # also when not finite
+                 accepted & stalled],
+                [CONVERGED, jnp.where(pd, NO_DECREASE, INDEFINITE), DIVERGED, CONVERGED], RUNNING).astype(jnp.int32)
+            step = dict(xs=x_new, us=u_new, cost=c_new, steps=s["steps"] + 1,
+                        costs=s["costs"].at[s["steps"] + 1].set(c_new))
+            reg = dict(mu=jnp.where(accepted, mu_down, mu_up), delta=jnp.where(accepted, delta_down, delta_up))
+            # a final pass reports the regularisation it ran with
+            return {**s, **_where(accepted, step, s), **_where(status == RUNNING, reg, s),
+                    "K": K, "passes": s["passes"] + 1, "grad": grad, "size": size, "status": status}
+
+        def running(s):
+            return (s["status"] == RUNNING) & (s["passes"] < max_iter)
+
+        end = jax.lax.while_loop(running, iteration, start)
+        end["minimum"] = jax.lax.cond(end["status"] == CONVERGED, is_minimum, lambda *_: jnp.zeros((), bool),
+                                      end["xs"], end["us"], params)
+        return end["xs"], end["us"], end["K"], end["costs"], jnp.stack([end[key].astype(float) for key in SUMMARY])
+
+    return (jax.jit(rollout), jax.jit(jax.value_and_grad(shooting_cost)),
+            jax.jit(solve, static_argnames=("second_order", "max_iter")))
 
 
 @lru_cache(maxsize=256)
@@ -196,7 +290,7 @@ def _check_outputs(dynamics, running_cost, terminal_cost, n, m, treedef, specs):
 
 
 def _check_problem(dynamics, running_cost, terminal_cost, x0, us, params):
-    """Validate the inputs and the callables' output shapes up front; return x0, us, params as JAX arrays."""
+    """Validate the inputs and the callables' output shapes up front; return x0 and us as float arrays."""
     for name, fn in (("dynamics", dynamics), ("running_cost", running_cost), ("terminal_cost", terminal_cost)):
         if not callable(fn):
             raise ValueError(f"{name} must be callable, got {type(fn).__name__}")
@@ -211,14 +305,13 @@ def _check_problem(dynamics, running_cost, terminal_cost, x0, us, params):
     leaves, treedef = jax.tree_util.tree_flatten(params)
     specs = tuple((np.shape(leaf), np.result_type(leaf).name) for leaf in leaves)
     _check_outputs(dynamics, running_cost, terminal_cost, x0.shape[0], us.shape[1], treedef, specs)
-    # on the device once, so that the iterations do not convert them again at every call
-    return jnp.asarray(x0), jnp.asarray(us), jax.tree_util.tree_map(jnp.asarray, params)
+    return x0, us
 
 
 @_x64
 def rollout(dynamics, x0, us, params=None):
     """States ``x_0..x_N`` (N+1, n) reached from ``x0`` under the controls ``us`` (N, m)."""
-    x0, us, params = _check_problem(dynamics, _no_cost, _no_terminal_cost, x0, us, params)
+    x0, us = _check_problem(dynamics, _no_cost, _no_terminal_cost, x0, us, params)
     return np.asarray(_kernels(dynamics, _no_cost, _no_terminal_cost)[0](x0, us, params))
 
 
@@ -233,16 +326,14 @@ def _no_terminal_cost(x, params):
 @_x64
 def trajectory_cost(dynamics, running_cost, terminal_cost, x0, us, params=None):
     """The single-shooting objective ``H_J(u)`` of eq. (6.6): the total cost of the rollout of ``us``."""
-    x0, us, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
-    value, _ = _kernels(dynamics, running_cost, terminal_cost)[2](us, x0, params)
-    return float(value)
+    return trajectory_cost_grad(dynamics, running_cost, terminal_cost, x0, us, params)[0]
 
 
 @_x64
 def trajectory_cost_grad(dynamics, running_cost, terminal_cost, x0, us, params=None):
     """``(H_J(u), dH_J/du)``: the single-shooting objective and its autodiff gradient (N, m)."""
-    x0, us, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
-    value, grad = _kernels(dynamics, running_cost, terminal_cost)[2](us, x0, params)
+    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
+    value, grad = _kernels(dynamics, running_cost, terminal_cost)[1](us, x0, params)
     return float(value), np.asarray(grad)
 
 
@@ -256,28 +347,19 @@ def solve_single_shooting(dynamics, running_cost, terminal_cost, x0, us0, params
     """
     from scipy.optimize import minimize
 
-    x0, us0, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
-    value_and_grad = _kernels(dynamics, running_cost, terminal_cost)[2]
+    x0, us0 = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
+    value_and_grad = _kernels(dynamics, running_cost, terminal_cost)[1]
     shape = us0.shape
+    # on the device once, so that the evaluations do not convert them again at every call
+    x0, params = jax.device_put((x0, params))
 
     def fun(flat):
-        value, grad = value_and_grad(jnp.asarray(flat.reshape(shape)), x0, params)
+        value, grad = value_and_grad(flat.reshape(shape), x0, params)
         return float(value), np.asarray(grad, dtype=float).ravel()
 
-    res = minimize(fun, np.asarray(us0).ravel(), jac=True, method="L-BFGS-B",
+    res = minimize(fun, us0.ravel(), jac=True, method="L-BFGS-B",
                    options={"maxiter": max_iter, "maxfun": 2 * max_iter, "gtol": gtol, "ftol": 1e-15})
     return res.x.reshape(shape), float(res.fun), res
-
-
-def _local_minimum(is_minimum, xs, us, K, costs, mu, params):
-    """The result at a stationary point, after checking that it is a minimum, not a saddle or a maximum."""
-    if not bool(is_minimum(xs, us, params)):
-        raise ILQRError(f"iLQR stopped at a stationary point (cost {costs[-1]:.6g}) that is not a local minimum: "
-                        "the exact Hessian of the cost in the controls is not positive definite; "
-                        "the objective may be unbounded below, or a symmetric start sits on a saddle "
-                        "(start from a perturbed guess)")
-    return ILQRResult(xs=np.asarray(xs), us=np.asarray(us), K=np.asarray(K), cost=costs[-1],
-                      iterations=len(costs) - 1, costs=np.asarray(costs), reg=mu)
 
 
 @_x64
@@ -298,48 +380,38 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     """
     if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
         raise ValueError(f"max_iter must be a positive integer, got {max_iter!r}")
-    for name, value in (("grad_tol", grad_tol), ("stall_tol", stall_tol), ("reg_max", reg_max),
-                        ("divergence_bound", divergence_bound)):
+    tol = dict(grad_tol=grad_tol, stall_tol=stall_tol, reg_max=reg_max, divergence_bound=divergence_bound)
+    for name, value in tol.items():
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    x0, us, params = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
-    roll, cost_of, _, iterate, is_minimum = _kernels(dynamics, running_cost, terminal_cost)
-    xs = roll(x0, us, params)
-    cost = float(cost_of(xs, us, params))
-    if not np.isfinite(cost):
+    x0, us = _check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
+    solve = _kernels(dynamics, running_cost, terminal_cost)[2]
+    xs, us, K, costs, summary = jax.device_get(solve(x0, us, params, {k: float(v) for k, v in tol.items()},
+                                                     second_order=bool(second_order), max_iter=int(max_iter)))
+    end = dict(zip(SUMMARY, summary.tolist()))
+    status, steps, grad = int(end["status"]), int(end["steps"]), end["grad"]
+    costs = costs[:steps + 1]
+    cost = float(costs[-1])
+    if status == CONVERGED and end["minimum"]:
+        return ILQRResult(xs=xs, us=us, K=K, cost=cost, iterations=steps, costs=costs, reg=end["mu"])
+    if status == CONVERGED:
+        raise ILQRError(f"iLQR stopped at a stationary point (cost {cost:.6g}) that is not a local minimum: "
+                        "the exact Hessian of the cost in the controls is not positive definite; "
+                        "the objective may be unbounded below, or a symmetric start sits on a saddle "
+                        "(start from a perturbed guess)")
+    if status == NONFINITE_START:
         raise ILQRError(f"the initial guess has a non-finite cost ({cost})")
-
-    mu, delta = 0.0, 1.0  # Tassa's regularisation and its growth factor
-    mu_min, delta0 = 1e-6, 2.0
-    costs = [cost]
-    for _ in range(max_iter):
-        x_new, u_new, K, scalars = iterate(x0, xs, us, cost, params, mu, second_order=bool(second_order))
-        c_new, accepted, pd, grad, size = np.asarray(scalars).tolist()
-        if pd and grad <= grad_tol * (1 + abs(cost)):
-            return _local_minimum(is_minimum, xs, us, K, costs, mu, params)
-        if not accepted:  # Q_uu not positive definite, or no step size decreased the cost
-            delta = max(delta0, delta * delta0)
-            mu = max(mu_min, mu * delta)
-            if mu > reg_max:
-                why = ("the control Hessian Q_uu stayed indefinite" if not pd
-                       else "no step along the regularised direction decreased the cost")
-                raise ILQRError(f"iLQR failed: {why} up to regularisation mu = {reg_max:g} (cost {cost:.6g}, "
-                                f"largest gradient entry {grad:.3g} after {len(costs) - 1} steps); "
-                                "the objective is probably unbounded below or not smooth")
-            continue
-        improvement = cost - c_new
-        xs, us, cost = x_new, u_new, c_new
-        costs.append(cost)
-        size = max(size, abs(cost))
-        if not np.isfinite(size) or size > divergence_bound:
-            raise ILQRError(f"iLQR diverged: after {len(costs) - 1} steps the cost is {cost:.6g} and the largest "
-                            f"|state|, |control| or |cost| is {size:.3g} > divergence_bound = {divergence_bound:g}; "
-                            "the objective is unbounded below (for a legible objective (1 + alpha) J1 - J0, "
-                            "increase alpha or shorten the horizon)")
-        if improvement <= stall_tol * (1 + abs(cost)) and grad <= 1e3 * grad_tol * (1 + abs(cost)):
-            return _local_minimum(is_minimum, xs, us, K, costs, mu, params)
-        delta = min(1 / delta0, delta / delta0)
-        mu = mu * delta if mu * delta > mu_min else 0.0
+    if status in (INDEFINITE, NO_DECREASE):
+        why = ("the control Hessian Q_uu stayed indefinite" if status == INDEFINITE
+               else "no step along the regularised direction decreased the cost")
+        raise ILQRError(f"iLQR failed: {why} up to regularisation mu = {reg_max:g} (cost {cost:.6g}, "
+                        f"largest gradient entry {grad:.3g} after {steps} steps); "
+                        "the objective is probably unbounded below or not smooth")
+    if status == DIVERGED:
+        raise ILQRError(f"iLQR diverged: after {steps} steps the cost is {cost:.6g} and the largest "
+                        f"|state|, |control| or |cost| is {end['size']:.3g} > divergence_bound = "
+                        f"{divergence_bound:g}; the objective is unbounded below (for a legible objective "
+                        "(1 + alpha) J1 - J0, increase alpha or shorten the horizon)")
     raise ILQRError(f"iLQR did not converge in {max_iter} iterations (cost {cost:.6g}, still falling by "
-                    f"{costs[-2] - costs[-1] if len(costs) > 1 else float('nan'):.3g} per step, largest "
+                    f"{costs[-2] - costs[-1] if steps else float('nan'):.3g} per step, largest "
                     f"gradient entry {grad:.3g}); the objective may be unbounded below or badly scaled")
