@@ -49,7 +49,7 @@ def main(argv=None):
     table["met"] = table["met"].map({True: "yes", False: "NO"}).fillna("")
     for col in ("baseline", "target"):
         table[col] = table[col].fillna("")
-    text = markdown_table(table.fillna(""), floatfmt=".3g")
+    text = markdown_table(table.astype(object).fillna(""), floatfmt=".3g")
     print(text)
     if not args.quick:
         header = (f"# Benchmarks\n\nMeasured by `make bench` on {platform.machine()} with "
