@@ -44,6 +44,25 @@ def log_partition(mdp, masks):
     """
     return _batched_backup(mdp, _masks(mdp, masks))[0]
 
+def log_partition_literal(mdp, masks):
+    """Algorithm 4 transcribed line by line (linear space, loops over t, x, a, x').
+
+    The reference the vectorized :func:`log_partition` is tested and benchmarked
+    against; far too slow for real use (``O(T |X|^2 |A|)`` Python steps).
+    """
+    S, K = mdp.dense_transitions(), masks.shape[2]
+    Z = np.exp(mdp.terminal_reward)[:, None] * np.ones(K)
+    for _ in range(mdp.horizon):
+        Z_new = np.zeros_like(Z)
+        for x in range(mdp.n_states):
+            for a in range(mdp.n_actions):
+                Q = mdp.reward[x, a] * np.ones(K)
+                for x2 in range(mdp.n_states):
+                    Q += S[x, a, x2] * np.log(Z[x2])
+                Z_new[x] += masks[x, a] * np.exp(Q)
+        Z = Z_new
+    return np.log(Z)
+
 
 def _batched_backup(mdp, masks, demos=None):
     """Algorithm 4 over blocks of candidates; with ``demos`` also each candidate's
