@@ -8,6 +8,7 @@ NOTEBOOKS := $(wildcard notebooks/[0-9][0-9]_*.ipynb)
 
 export SOURCE_DATE_EPOCH := 0
 export PYTHONHASHSEED := 0
+export MUTUAL_CACHE_DIR ?= $(CURDIR)/.cache
 export PYDEVD_DISABLE_FILE_VALIDATION := 1
 export OMP_NUM_THREADS ?= 2
 export OPENBLAS_NUM_THREADS ?= 2
@@ -17,9 +18,9 @@ export OPENBLAS_NUM_THREADS ?= 2
 ## figures: run every notebook (full parameters), rebuild figures/ and figures/REPRODUCTION.md
 figures: $(READY)
 	@echo "==> executing $(words $(NOTEBOOKS)) notebooks with papermill (executed copies in build/)"
-	$(BIN)/python -m mutual.notebooks $(NOTEBOOKS)
+	$(BIN)/python -m mutual.compendium.notebooks $(NOTEBOOKS)
 	@echo "==> building the reproduction report"
-	$(BIN)/python -m mutual.report
+	$(BIN)/python -m mutual.compendium.report
 
 ## test: unit tests plus a quick run of every notebook
 test: $(READY)

@@ -4,11 +4,12 @@ growth with the number of states, and the 30 x 30 full ranking target."""
 
 import numpy as np
 
-from mutual.chance_constraints import chance_forbidden
-from mutual.complexity import all_single_candidates, best_time, power_law_exponent
-from mutual.constraint_inference import (constraint_accrual, constraint_candidates, log_partition,
-                                         log_partition_literal, rank_candidates)
-from mutual.mdp import gridworld, sample_demonstrations
+from mutual.constraints.chance import chance_forbidden
+from mutual.constraints.complexity import all_single_candidates, best_time, power_law_exponent
+from mutual.constraints.inference import constraint_candidates
+from mutual.constraints.backup import (constraint_accrual, log_partition, log_partition_literal, rank_candidates)
+from mutual.constraints.demonstrations import sample_demonstrations
+from mutual.constraints.gridworld import gridworld
 
 
 def _row(case, seconds, baseline="", baseline_seconds=None, target="", met=None):

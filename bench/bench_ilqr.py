@@ -10,9 +10,9 @@ import time
 
 import numpy as np
 
-from mutual import evident_safety as es
-from mutual.legibility import single_integrator
-from mutual.legibility import solve as solve_riccati
+from mutual.motion import evident_safety as es
+from mutual.motion.legibility import single_integrator
+from mutual.motion.legibility import solve as solve_riccati
 
 SPEEDUP_TARGET = 10.0
 SAME_ORDER = 3.0  # "same order of iterations": the legible count within 3x the plain ones

@@ -7,9 +7,9 @@ g1 = (1, 1), start at the origin; legible objective (1 + alpha) J1 - J0 with alp
 
 import numpy as np
 
-from mutual import dragan_legibility as ds
-from mutual import legibility as leg
-from mutual.complexity import best_time
+from mutual.motion import dragan as ds
+from mutual.motion import legibility as leg
+from mutual.constraints.complexity import best_time
 
 DT, N = 0.01, 100
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])

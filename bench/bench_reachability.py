@@ -18,11 +18,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from mutual import reachability, supervisor
-from mutual.complexity import best_time
-from mutual.dubins import DubinsCar
-from mutual.reachability import FULL_GRID, QUICK_GRID, SolverSpec, _initial_values, value_library
-from mutual.supervisor import NoisySupervisor, approach_scenes, fit_supervisor
+from mutual.supervision import reachability
+from mutual.supervision import supervisor
+from mutual.constraints.complexity import best_time
+from mutual.supervision.dubins import DubinsCar
+from mutual.supervision.reachability import FULL_GRID, QUICK_GRID, SolverSpec, _initial_values, value_library
+from mutual.supervision.supervisor import approach_scenes, NoisySupervisor
+from mutual.supervision.fit import fit_supervisor
 
 RADIUS = 1.0
 W_MAXES = np.linspace(0.25, 3.0, 13)

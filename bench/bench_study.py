@@ -6,10 +6,10 @@ Full: the 101x101x64 grid, 12 recruits x 40 scenes, 60 s trials (66 trials of 5 
 Quick: the 41x41x24 grid, 20 s trials. The library is computed (or loaded) before timing.
 """
 
-from mutual import study_stats as st
-from mutual import teaming as tm
-from mutual.complexity import best_time
-from mutual.study_design import TREATMENTS
+from mutual.study import stats as st
+from mutual.study import cohort, teaming
+from mutual.constraints.complexity import best_time
+from mutual.study.design import TREATMENTS
 
 
 def _statistics(trials):
@@ -19,14 +19,14 @@ def _statistics(trials):
 
 
 def run(quick=False):
-    library, conservative = tm.study_value_functions(quick=quick)
-    config = tm.TeamingConfig(duration=20.0 if quick else 60.0)
+    library, conservative = cohort.study_value_functions(quick=quick)
+    config = teaming.TeamingConfig(duration=20.0 if quick else 60.0)
     repeats = 1 if quick else 2
     study = None
 
     def whole():
         nonlocal study
-        study = tm.simulate_study(library, conservative, config=config, seed=0)
+        study = cohort.simulate_study(library, conservative, config=config, seed=0)
         _statistics(study.trials)
 
     t_study = best_time(whole, repeats)
@@ -34,15 +34,15 @@ def run(quick=False):
     # the same trials: one batch vs one at a time (a subset of six for the serial baseline)
     people = study.participants.set_index("participant")
     keep = study.summary
-    teams = [tm.Team(study.standard if t == "Standard" else conservative if t == "Conservative"
+    teams = [teaming.Team(study.standard if t == "Standard" else conservative if t == "Conservative"
                      else study.fits[p].value_fn, study.fits[p].mu if t == "Learned" else 0.0)
              for p, t in zip(keep["participant"], keep["treatment"])]
     sups = [study.supervisors[p] for p in keep["participant"]]
     versions = keep["task_version"].tolist()
     n = len(teams)
-    t_batch = best_time(lambda: tm.simulate_teaming(teams, sups, versions, config, seed=0), repeats) / n
+    t_batch = best_time(lambda: teaming.simulate_teaming(teams, sups, versions, config, seed=0), repeats) / n
     k = 6
-    t_serial = best_time(lambda: [tm.simulate_teaming(teams[i:i + 1], sups[i:i + 1], versions[i:i + 1], config, seed=i)
+    t_serial = best_time(lambda: [teaming.simulate_teaming(teams[i:i + 1], sups[i:i + 1], versions[i:i + 1], config, seed=i)
                                   for i in range(k)], repeats) / k
     t_stats = best_time(lambda: _statistics(study.trials), 5 if quick else 20)
     grid = "quick 41x41x24" if quick else "full 101x101x64"

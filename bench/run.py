@@ -2,7 +2,10 @@
 ratios measured side by side, also written to figures/benchmarks.md.
 
 Each module defines ``run(quick=False) -> list[dict]`` with rows
-``{"benchmark", "case", "seconds", "baseline", "baseline_seconds", "target", "met"}``.
+``{"benchmark", "case", "seconds", "baseline", "baseline_seconds", "compile_seconds", "agree",
+"target", "met"}``: ``case`` names the problem and its size, ``baseline`` what a skilled
+practitioner would use, ``compile_seconds`` the one-off compile time (excluded from ``seconds``),
+``agree`` whether both give the same result and how that was checked.
 Usage: ``python bench/run.py [--quick] [NAME ...]`` (NAME filters the modules).
 """
 
@@ -10,15 +13,15 @@ import argparse
 import importlib.util
 import platform
 import sys
-from pathlib import Path
 
 import pandas as pd
 
 from mutual.atomic import write_text
-from mutual.figures import markdown_table
-from mutual.paths import ROOT, figures_dir
+from mutual.compendium.figures import markdown_table
+from mutual.compendium.paths import ROOT, figures_dir
 
-COLUMNS = ["benchmark", "case", "seconds", "baseline", "baseline_seconds", "ratio", "target", "met"]
+COLUMNS = ["benchmark", "case", "seconds", "baseline", "baseline_seconds", "ratio", "compile_seconds", "agree",
+           "target", "met"]
 
 
 def _load(path):
@@ -47,7 +50,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     table = collect(args.quick, args.names)
     table["met"] = table["met"].map({True: "yes", False: "NO"}).fillna("")
-    for col in ("baseline", "target"):
+    for col in ("baseline", "target", "agree"):
         table[col] = table[col].fillna("")
     text = markdown_table(table.astype(object).fillna(""), floatfmt=".3g")
     print(text)

@@ -4,6 +4,7 @@ so no test ever writes into the committed ``figures/``."""
 import json
 import os
 import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -13,9 +14,10 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
 os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
 os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")
+os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
-from mutual.notebooks import NotebookError, execute  # noqa: E402
-from mutual.paths import NOTEBOOKS, results_dir  # noqa: E402
+from mutual.compendium.notebooks import NotebookError, execute  # noqa: E402
+from mutual.compendium.paths import NOTEBOOKS, results_dir  # noqa: E402
 
 
 @pytest.fixture(scope="session")

@@ -4,9 +4,11 @@ Lemma 3.2.1), checked against plain loops and the likelihood itself."""
 import numpy as np
 import pytest
 
-from mutual.chance_constraints import chance_forbidden, constraint_mask, max_likelihood_thresholds
-from mutual.constraint_inference import constraint_candidates, rank_candidates
-from mutual.mdp import GRID_ACTIONS, demonstration_log_likelihood, gridworld, sample_demonstrations
+from mutual.constraints.chance import chance_forbidden, constraint_mask, max_likelihood_thresholds
+from mutual.constraints.inference import constraint_candidates
+from mutual.constraints.backup import rank_candidates
+from mutual.constraints.demonstrations import demonstration_log_likelihood, sample_demonstrations
+from mutual.constraints.gridworld import GRID_ACTIONS, gridworld
 
 
 @pytest.fixture(scope="module")

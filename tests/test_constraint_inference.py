@@ -6,12 +6,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from mutual.chance_constraints import constraint_mask
-from mutual.constraint_inference import (constraint_accrual, constraint_candidates, expected_features,
-                                         greedy_inference, log_partition, log_partition_literal, rank_candidates,
-                                         value_ratio)
-from mutual.mdp import (GRID_ACTIONS, MDP, demonstration_log_likelihood, gridworld, sample_demonstrations,
-                        soft_policy)
+from mutual.constraints.chance import constraint_mask
+from mutual.constraints.inference import constraint_candidates, greedy_inference
+from mutual.constraints.backup import (constraint_accrual, expected_features, log_partition, log_partition_literal, rank_candidates, value_ratio)
+from mutual.constraints.mdp import MDP, soft_policy
+from mutual.constraints.demonstrations import demonstration_log_likelihood, sample_demonstrations
+from mutual.constraints.gridworld import GRID_ACTIONS, gridworld
 
 
 @pytest.fixture(scope="module")
@@ -174,7 +174,7 @@ def test_notebooks_report_the_chapter_numbers(executed_notebook):
 
 
 def test_notebooks_save_no_timings_and_the_horizon_table(executed_notebook):
-    from mutual.paths import figures_dir
+    from mutual.compendium.paths import figures_dir
     executed_notebook("01_constraint_inference")
     executed_notebook("02_chance_thresholds")
     assert not list(figures_dir().glob("fig_2_complexity*"))
@@ -184,7 +184,7 @@ def test_notebooks_save_no_timings_and_the_horizon_table(executed_notebook):
 
 
 def test_power_law_exponent_recovers_a_known_power():
-    from mutual.complexity import all_single_candidates, best_time, power_law_exponent
+    from mutual.constraints.complexity import all_single_candidates, best_time, power_law_exponent
     sizes = np.array([10.0, 20.0, 40.0, 80.0])
     assert power_law_exponent(sizes, 3e-4 * sizes ** 2.5) == pytest.approx(2.5)
     with pytest.raises(ValueError, match="sizes/cost"):
@@ -197,7 +197,7 @@ def test_power_law_exponent_recovers_a_known_power():
 
 
 def test_algorithm_agreement_and_summary(stochastic):
-    from mutual.constraint_inference import algorithm_agreement
+    from mutual.constraints.backup import algorithm_agreement
     g, demos, cand = stochastic
     r = algorithm_agreement(g.mdp, demos, cand)
     assert r["alg34"] < 1e-10 and r["same_ranking"] and r["alg23"] > 1e-3
@@ -210,7 +210,7 @@ def test_algorithm_agreement_and_summary(stochastic):
 
 @pytest.mark.parametrize("sparse", [False, True])
 def test_counted_work_is_one_pass_over_S_per_candidate_and_step(sparse):
-    from mutual.complexity import all_single_candidates, counting_multiply_adds, gridworld_ranking_work
+    from mutual.constraints.complexity import all_single_candidates, counting_multiply_adds, gridworld_ranking_work
     g = gridworld(4, 4, (0, 0), (3, 0), slip=0.1, horizon=5, sparse=sparse)
     masks = all_single_candidates(g.mdp)
     S, T, K = g.mdp.dense_transitions(), g.mdp.horizon, masks.shape[2]
@@ -227,7 +227,7 @@ def test_counted_work_is_one_pass_over_S_per_candidate_and_step(sparse):
 
 
 def test_horizon_sensitivity_reruns_round_one_per_horizon():
-    from mutual.constraint_inference import horizon_sensitivity
+    from mutual.constraints.inference import horizon_sensitivity
     grid_at = lambda T: gridworld(5, 4, (0, 0), (4, 0), slip=0.1, horizon=T)  # noqa: E731
     g = grid_at(8)
     truth = constraint_mask(g.mdp, [g.state(2, 0)], 0.25)
@@ -245,7 +245,7 @@ def test_horizon_sensitivity_reruns_round_one_per_horizon():
 
 
 def test_latest_recovery_is_the_worst_case():
-    from mutual.constraint_inference import latest_recovery
+    from mutual.constraints.inference import latest_recovery
     assert latest_recovery([3, 5, 4]) == 5
     assert latest_recovery([3, "not reached"]) == "not reached"
     with pytest.raises(ValueError, match="rounds"):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mutual.dragan_legibility import (goal_posterior, legibility_score, optimise_legibility, score_gradient,
+from mutual.motion.dragan import (goal_posterior, legibility_score, optimise_legibility, score_gradient,
                                       score_weights, trajectory_cost)
 
 GOALS = np.array([[-1.0, 1.0], [1.0, 1.0]])

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mutual.dubins import (DubinsCar, avoid_value_closed_form, check_states, dubins_step, keep_out_margin,
+from mutual.supervision.dubins import (DubinsCar, avoid_value_closed_form, check_states, dubins_step, keep_out_margin,
                            rotate_to_heading, unsafe_reach)
 
 W, R_OBS, V = 1.0, 1.0, 3.0

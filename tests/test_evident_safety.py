@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from mutual import evident_safety as es
-from mutual.dubins import dubins_step as dubins_step_numpy
-from mutual.ilqr import ILQRError
-from mutual.legibility import single_integrator
-from mutual.legibility import solve as solve_riccati
+from mutual.motion import evident_safety as es
+from mutual.supervision.dubins import dubins_step as dubins_step_numpy
+from mutual.motion.ilqr import ILQRError
+from mutual.motion.legibility import single_integrator
+from mutual.motion.legibility import solve as solve_riccati
 
 
 def test_dubins_step_integrates_eq_7_5_exactly_for_constant_turn_rates():

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from mutual.ilqr import ILQRError, ilqr, rollout, trajectory_cost, trajectory_cost_grad
-from mutual.lqr import solve_lq
+from mutual.motion.ilqr import ILQRError, ilqr, rollout, trajectory_cost, trajectory_cost_grad
+from mutual.motion.lqr import solve_lq
 
 
 def _random_lq(seed=0, n=4, m=2, N=30):

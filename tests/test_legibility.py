@@ -5,10 +5,9 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from mutual.legibility import (LinearDynamics, QuadraticCost, legible_cost, legible_trajectory,
-                               lifted_cost, likelihood_ratio_minimiser, linear_alpha_schedule,
-                               log_boltzmann, log_likelihood_ratio, multi_distractor_qp, reaching_cost,
-                               receding_horizon, single_integrator, solve)
+from mutual.motion.legibility import (legible_cost, legible_trajectory, linear_alpha_schedule, LinearDynamics, QuadraticCost, reaching_cost, receding_horizon, single_integrator, solve)
+from mutual.motion.observer import (lifted_cost, likelihood_ratio_minimiser, log_boltzmann, log_likelihood_ratio)
+from mutual.motion.qp import multi_distractor_qp
 
 DT, N = 0.01, 100
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])

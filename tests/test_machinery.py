@@ -11,17 +11,17 @@ import nbformat
 import pandas as pd
 import pytest
 
-import mutual.paths as paths
+import mutual.compendium.paths as paths
 from mutual.atomic import atomic_path
-from mutual.claims import verdict
-from mutual.figures import save_table, savefig
-from mutual.notebooks import NotebookError, declared_parameters, execute
-from mutual.report import build_report
-from mutual.results import write_results
+from mutual.compendium.claims import verdict
+from mutual.compendium.figures import save_table, savefig
+from mutual.compendium.notebooks import NotebookError, declared_parameters, execute
+from mutual.compendium.report import build_report
+from mutual.compendium.results import write_results
 
 
 def test_root_is_independent_of_working_directory(tmp_path):
-    out = subprocess.run([sys.executable, "-c", "import mutual.paths as p; print(p.ROOT)"],
+    out = subprocess.run([sys.executable, "-c", "import mutual.compendium.paths as p; print(p.ROOT)"],
                          cwd=tmp_path, capture_output=True, text=True, check=True)
     assert out.stdout.strip() == str(paths.ROOT)
     assert (paths.ROOT / "pyproject.toml").exists()
@@ -38,7 +38,7 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path):
 
 FIGURE_SCRIPT = textwrap.dedent("""
     import numpy as np, matplotlib.pyplot as plt
-    from mutual.figures import use_style, savefig
+    from mutual.compendium.figures import use_style, savefig
     use_style()
     fig, ax = plt.subplots()
     ax.plot(np.linspace(0, 1, 50) ** 2, label="a")
@@ -76,15 +76,19 @@ def test_figure_and_table_names_are_checked(tmp_path, monkeypatch):
 
 CLAIMS = pd.DataFrame([
     {"id": "c9-abs", "chapter": "9", "section": "9.1", "statement": "x is 0.29", "thesis_value": "0.29",
-     "compare": "abs:0.02", "figure": "fig_9_1"},
+     "compare": "abs:0.02", "basis": "computed", "figure": "fig_9_1"},
     {"id": "c9-ge", "chapter": "9", "section": "9.1", "statement": "over 97%", "thesis_value": "0.97",
-     "compare": ">=", "figure": ""},
+     "compare": ">=", "basis": "computed", "figure": ""},
     {"id": "c9-true", "chapter": "9", "section": "9.2", "statement": "nesting holds", "thesis_value": "true",
-     "compare": "true", "figure": ""},
+     "compare": "true", "basis": "computed", "figure": ""},
     {"id": "c9-human", "chapter": "9", "section": "9.3", "statement": "F(2, 20) = 8.72", "thesis_value": "8.72",
-     "compare": "original-data", "figure": ""},
+     "compare": "none", "basis": "original-data", "figure": ""},
     {"id": "c9-pending", "chapter": "9", "section": "9.3", "statement": "later", "thesis_value": "1",
-     "compare": "rel:0.1", "figure": ""},
+     "compare": "rel:0.1", "basis": "computed", "figure": ""},
+    {"id": "c9-p-from-f", "chapter": "9", "section": "9.3", "statement": "p = 0.002", "thesis_value": "0.002",
+     "compare": "abs:0.0005", "basis": "thesis-numbers", "figure": ""},
+    {"id": "c9-open", "chapter": "9", "section": "9.4", "statement": "three times longer", "thesis_value": "3",
+     "compare": "range", "basis": "undetermined", "figure": ""},
 ])
 
 
@@ -101,6 +105,7 @@ def claims_file(tmp_path, monkeypatch):
     ("c9-abs", 0.30, "reproduced"), ("c9-abs", 0.35, "differs"), ("c9-ge", 0.98, "reproduced"),
     ("c9-ge", 0.90, "differs"), ("c9-true", True, "reproduced"), ("c9-true", False, "differs"),
     ("c9-human", 3.1, "not reproducible without the original data"), ("c9-pending", None, "pending"),
+    ("c9-p-from-f", 0.0021, "consistent"), ("c9-p-from-f", 0.01, "differs"), ("c9-open", [1.5, 4.0], "undetermined"),
 ])
 def test_verdicts(cid, got, expected):
     row = CLAIMS.set_index("id").loc[cid].to_dict() | {"id": cid}
@@ -116,7 +121,8 @@ def test_report_lists_every_claim_with_its_verdict(claims_file):
     assert "| reproduced |" in rows["c9-abs"] and "| pending |" in rows["c9-pending"]
     assert "0.99 (n = 50)" in rows["c9-ge"]
     assert "| not reproducible without the original data | yes |" in rows["c9-human"]
-    assert "3 reproduced, 0 differs, 1 not reproducible without the original data, 1 pending" in text
+    assert ("3 reproduced, 0 consistent, 0 differs, 0 undetermined, 1 not reproducible without the original data, "
+            "3 pending") in text
 
 
 def test_unknown_claim_id_is_an_error(claims_file, tmp_path):
@@ -163,7 +169,17 @@ def test_runner_requires_declared_parameters(tmp_path):
 
 def test_make_figures_runner_exits_non_zero_naming_the_notebook(tmp_path):
     path = _notebook(tmp_path, "quick = False", "1 / 0")
-    out = subprocess.run([sys.executable, "-m", "mutual.notebooks", "--quick", str(path)],
+    out = subprocess.run([sys.executable, "-m", "mutual.compendium.notebooks", "--quick", str(path)],
                          capture_output=True, text=True, cwd=tmp_path)
     assert out.returncode != 0
     assert "99_demo.ipynb failed in code cell 2 ('1 / 0')" in out.stderr and "ZeroDivisionError" in out.stderr
+
+
+def test_rules_must_fit_their_basis():
+    row = CLAIMS.set_index("id").loc["c9-open"].to_dict() | {"id": "c9-open"}
+    with pytest.raises(ValueError, match=r"range \[low, high\]"):
+        verdict(row, 3.0)
+    with pytest.raises(ValueError, match="does not fit basis"):
+        verdict(row | {"compare": "abs:0.1"}, 3.0)
+    with pytest.raises(ValueError, match="basis 'echo'"):
+        verdict(row | {"basis": "echo"}, 3.0)

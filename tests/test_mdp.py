@@ -9,9 +9,9 @@ import pytest
 import scipy.sparse as sp
 from scipy.special import logsumexp
 
-from mutual.mdp import (GRID_ACTIONS, MDP, Demonstrations, check_demonstrations, demonstration_log_likelihood,
-                        gridworld, load_demonstrations, sample_demonstrations, soft_bellman_backup, soft_policy,
-                        write_demonstrations)
+from mutual.constraints.mdp import MDP, soft_bellman_backup, soft_policy
+from mutual.constraints.demonstrations import (check_demonstrations, demonstration_log_likelihood, Demonstrations, load_demonstrations, sample_demonstrations, write_demonstrations)
+from mutual.constraints.gridworld import GRID_ACTIONS, gridworld
 
 
 def random_mdp(seed=0, X=5, A=3, T=4):
@@ -86,7 +86,7 @@ def test_backup_is_stable_for_long_horizons_and_large_rewards():
 
 def test_gradient_of_log_z_is_the_expected_visitation():
     # d log Z / d r(x, a) = expected number of visits of (x, a): Algorithm 1's feature expectation
-    from mutual.constraint_inference import state_action_visitation
+    from mutual.constraints.backup import state_action_visitation
     mdp = random_mdp(4, X=4, A=3, T=5)
     mask = np.ones((4, 3), dtype=bool)
     mask[1, 2] = False

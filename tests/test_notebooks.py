@@ -5,8 +5,8 @@ import ast
 import nbformat
 import pytest
 
-from mutual.notebooks import declared_parameters
-from mutual.paths import NOTEBOOKS
+from mutual.compendium.notebooks import declared_parameters
+from mutual.compendium.paths import NOTEBOOKS
 
 NOTEBOOK_PATHS = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
 IDS = [p.stem for p in NOTEBOOK_PATHS]

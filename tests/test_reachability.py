@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-import mutual.reachability as reach
-from mutual.dubins import avoid_value_closed_form, dubins_step, keep_out_margin
-from mutual.reachability import (QUICK_GRID, GridSpec, SolverSpec, ValueFunction, unsafe_set_contains,
+import mutual.supervision.reachability as reach
+from mutual.supervision.dubins import avoid_value_closed_form, dubins_step, keep_out_margin
+from mutual.supervision.reachability import (QUICK_GRID, GridSpec, SolverSpec, ValueFunction, unsafe_set_contains,
                                  value_library)
 
 W_MAXES = 0.25 * np.arange(1, 13)

@@ -5,7 +5,7 @@ from itertools import permutations
 import numpy as np
 import pytest
 
-from mutual.study_design import TREATMENTS, balanced_latin_square, design_balance, study_design
+from mutual.study.design import TREATMENTS, balanced_latin_square, design_balance, study_design
 
 
 @pytest.mark.parametrize("n", [2, 3, 4, 5, 6])

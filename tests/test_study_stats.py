@@ -14,9 +14,9 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from mutual.study_data import illustrative_questionnaire, read_table, validate_trials, write_table
-from mutual.study_design import study_design
-from mutual.study_stats import (cell_table, design_from_f_dofs, f_p_value, likert_vs_neutral, paired_t_holm,
+from mutual.study.data import illustrative_questionnaire, read_table, validate_trials, write_table
+from mutual.study.design import study_design
+from mutual.study.stats import (cell_table, design_from_f_dofs, f_p_value, likert_vs_neutral, paired_t_holm,
                                 recover_from_summary, rm_anova, tukey_from_summary, tukey_rm)
 
 PAIRWISE_TESTS = """Subject,Gender,Drug,Scores

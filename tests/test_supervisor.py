@@ -5,11 +5,11 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from mutual.dubins import keep_out_margin
-from mutual.reachability import QUICK_GRID, value_library
-from mutual.supervisor import (NoisySupervisor, approach_scenes, filter_control, fit_supervisor, gaussian_mle,
-                               intervention_states, read_interventions, safety_controller, simulate_filtered,
-                               validate_interventions, write_interventions)
+from mutual.supervision.dubins import keep_out_margin
+from mutual.supervision.reachability import QUICK_GRID, value_library
+from mutual.supervision.supervisor import (approach_scenes, intervention_states, NoisySupervisor, read_interventions, validate_interventions, write_interventions)
+from mutual.supervision.fit import fit_supervisor, gaussian_mle
+from mutual.supervision.control import filter_control, safety_controller, simulate_filtered
 
 W_MAXES = 0.25 * np.arange(1, 13)
 RADIUS = 1.0

@@ -3,12 +3,13 @@
 import numpy as np
 import pytest
 
-from mutual.reachability import unsafe_set_contains
-from mutual.study_data import validate_trials
-from mutual.study_design import TREATMENTS
-from mutual.supervisor import NoisySupervisor, fit_supervisor
-from mutual.teaming import (Team, TeamingConfig, fraction_inside, phase2_interventions,
-                            predicted_and_observed, simulate_study, simulate_teaming, study_value_functions)
+from mutual.supervision.reachability import unsafe_set_contains
+from mutual.study.data import validate_trials
+from mutual.study.design import TREATMENTS
+from mutual.supervision.supervisor import NoisySupervisor
+from mutual.supervision.fit import fit_supervisor
+from mutual.study.cohort import fraction_inside, phase2_interventions, predicted_and_observed, simulate_study, study_value_functions
+from mutual.study.teaming import Team, TeamingConfig, simulate_teaming
 
 
 @pytest.fixture(scope="module")

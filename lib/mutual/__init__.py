@@ -1,4 +1,18 @@
-"""mutual: the algorithms of the thesis "Towards Mutual Understanding between
-Mortals and Machines in Motion for Safety", one module per idea."""
+"""mutual: the algorithms of the thesis "Towards Mutual Understanding between Mortals and
+Machines in Motion for Safety" (McPherson, 2022), laid out by its two thrusts (Figure 8.1).
+
+Machines learning human models of safety:
+
+* :mod:`mutual.constraints` -- constraints and chance thresholds from demonstrations (ch. 2-3);
+* :mod:`mutual.supervision` -- a supervisor's safe set from their interventions (ch. 4);
+* :mod:`mutual.study` -- the teaming study and its statistics (ch. 5).
+
+Robots informing humans through motion:
+
+* :mod:`mutual.motion` -- legible motion (ch. 6) and evident safety (ch. 7).
+
+:mod:`mutual.compendium` is the machinery of this repository (paths, figures, the report); the
+algorithms never import it.
+"""
 
 __version__ = "0.1.0"

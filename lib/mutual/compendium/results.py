@@ -12,7 +12,7 @@ import numbers
 
 import numpy as np
 
-from .atomic import write_text
+from ..atomic import write_text
 from .claims import load_claims
 from .paths import results_dir
 
@@ -39,7 +39,9 @@ def write_results(notebook, claims, simulated=False):
     """Write ``figures/results/<notebook>.json`` from ``{claim_id: value or dict}``.
 
     A dict entry may carry ``value``, ``simulated`` (overriding the default for
-    the whole notebook) and ``note``. Unknown claim ids raise a ValueError.
+    the whole notebook), ``note`` and ``computed_by`` (the dotted name of the library function
+    that computed the value, e.g. ``mutual.constraints.inference.greedy_inference``).
+    Unknown claim ids raise a ValueError.
     """
     known = set(load_claims()["id"])
     entries = {}
@@ -47,11 +49,13 @@ def write_results(notebook, claims, simulated=False):
         if cid not in known:
             raise ValueError(f"claim id {cid!r} (from notebook {notebook!r}) is not in data/paper_claims.csv")
         entry = dict(entry) if isinstance(entry, dict) else {"value": entry}
-        unknown = set(entry) - {"value", "simulated", "note"}
+        unknown = set(entry) - {"value", "simulated", "note", "computed_by"}
         if unknown or "value" not in entry:
-            raise ValueError(f"claim {cid!r}: entry needs 'value' and may carry only 'simulated' and 'note', got {sorted(entry)}")
+            raise ValueError(f"claim {cid!r}: entry needs 'value' and may carry only 'simulated', 'note' and "
+                             f"'computed_by', got {sorted(entry)}")
         entries[cid] = {"value": _plain(entry["value"]),
                         "simulated": bool(entry.get("simulated", simulated)),
-                        "note": str(entry.get("note", ""))}
+                        "note": str(entry.get("note", "")),
+                        "computed_by": str(entry.get("computed_by", ""))}
     text = json.dumps({"notebook": notebook, "claims": entries}, indent=1, sort_keys=True) + "\n"
     return write_text(results_dir() / f"{notebook}.json", text)

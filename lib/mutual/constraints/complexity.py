@@ -14,9 +14,9 @@ from unittest import mock
 import numpy as np
 
 from . import mdp as mdp_module
-from .chance_constraints import chance_forbidden
-from .constraint_inference import log_partition, value_ratio
-from .mdp import gridworld
+from .chance import chance_forbidden
+from .backup import log_partition, value_ratio
+from .gridworld import gridworld
 
 
 def best_time(fn, repeats=3):

@@ -22,7 +22,7 @@ from scipy import stats
 from statsmodels.stats.anova import AnovaRM
 from statsmodels.stats.multitest import multipletests
 
-from .study_data import LIKERT_RANGE
+from .data import LIKERT_RANGE
 
 
 @dataclass(frozen=True)

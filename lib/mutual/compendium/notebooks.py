@@ -1,5 +1,5 @@
 """Run the compendium's notebooks: papermill for ``make figures``, nbclient for
-the tests (``python -m mutual.notebooks [--quick] NOTEBOOK...``).
+the tests (``python -m mutual.compendium.notebooks [--quick] NOTEBOOK...``).
 
 Every notebook has exactly one cell tagged ``parameters`` that declares
 ``quick``; a run that passes a parameter the notebook does not declare, or a

@@ -8,7 +8,7 @@ The grid is ``[-L, L]^2`` around the obstacle centre times ``theta`` in ``[-pi, 
 One solver is compiled per (grid, accuracy) with ``w_max`` a traced argument, so a library over
 ``w_max`` (Fig. 4.2) compiles once; ``batch="vmap"`` advances all members together (for a GPU),
 ``batch="loop"`` one after another (faster on a small CPU). Every member is cached on disk under
-``mutual.paths.cache_dir() / "reachability"``, keyed by everything that changes it.
+``mutual.cache.cache_dir() / "reachability"``, keyed by everything that changes it.
 
 Interpolation is trilinear and vectorised in numpy (periodic in theta); outside the (x, y)
 domain it returns ``fill_value`` (NaN unless asked otherwise).
@@ -26,10 +26,10 @@ import jaxlib
 import numpy as np
 from tqdm import tqdm
 
-from . import __version__
-from .atomic import atomic_path
+from .. import __version__
+from ..atomic import atomic_path
 from .dubins import SPEED, DubinsCar, _check_positive, check_states, unsafe_reach
-from .paths import cache_dir
+from ..cache import cache_dir
 
 ACCURACIES = ("low", "medium", "high", "very_high")
 _CACHE_FORMAT = 1

@@ -6,19 +6,18 @@ distributed, ``P(u | H_i) = exp(-J_i(u)) / Z_i`` (eq. (6.8)). By Theorem 6.4.2
 the likelihood ratio ``Lambda = P(u|H0) / P(u|H1)`` (eq. (6.7)) has the same
 minimisers as ``J1 - J0`` (eq. (6.13)); weighting the task, ``(1 + alpha) J1 - J0``
 (eq. (6.15)). For linear dynamics and quadratic costs this is one LQ problem,
-solved exactly by :func:`mutual.lqr.solve_lq`.
+solved exactly by :func:`mutual.motion.lqr.solve_lq`.
 
-Costs use the convention of :mod:`mutual.lqr`: stage cost ``1/2 x'Qx + q'x +
+Costs use the convention of :mod:`mutual.motion.lqr`: stage cost ``1/2 x'Qx + q'x +
 1/2 u'Ru + r'u``, terminal ``1/2 x'Q_N x + q_N'x``, plus a constant, so that
 costs add and scale (``1.5 * J1 - J0``) exactly as hypotheses do in eq. (6.15).
 With quadratic costs and linear dynamics ``P(u | H_i)`` is Gaussian in the
-stacked controls, so ``Z_i`` and ``Lambda`` have closed forms
-(:func:`log_likelihood_ratio`).
+stacked controls, so ``Z_i`` and ``Lambda`` have closed forms (:mod:`.observer`); several
+distractors at once are the QP of :mod:`.qp`.
 """
 
 from dataclasses import dataclass
 
-import cvxpy as cp
 import numpy as np
 
 from .lqr import riccati_backward, solve_lq
@@ -195,7 +194,7 @@ def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
     ``[t_i, N)`` with ``alpha_i = alpha_of_s(t_i / N)`` and follows each plan until the
     next replanning. The replans' backward Riccati passes share the dynamics and
     differ only in ``alpha``, so they run together in one batched sweep
-    (:func:`mutual.lqr.riccati_backward`); the closed loop then applies plan ``i``'s
+    (:func:`mutual.motion.lqr.riccati_backward`); the closed loop then applies plan ``i``'s
     feedback on its own steps, which reproduces its open-loop controls exactly.
     Returns ``(xs, us, alphas)`` with ``alphas[k]`` the weight in force at step ``k``.
     """
@@ -228,178 +227,6 @@ def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
         u = us[t] = Ks[t] @ x + ks[t]
         x = xs[t + 1] = A[t] @ x + B[t] @ u
     return xs, us, alphas[plan]
-
-
-# ---- the Boltzmann observer in closed form --------------------------------------------------
-
-def lifted_dynamics(dynamics, x0, N):
-    """``x_k = Phi_k x0 + G_k u`` for the stacked controls ``u`` (N m,): returns ``(Phi x0, G)``
-    with shapes (N+1, n) and (N+1, n, N m)."""
-    dyn = dynamics.stages(0, N)
-    n, m = dyn.n, dyn.m
-    A = np.broadcast_to(dyn.A, (N, n, n))
-    B = np.broadcast_to(dyn.B, (N, n, m))
-    free = np.empty((N + 1, n))
-    G = np.zeros((N + 1, n, N * m))
-    free[0] = x0
-    for k in range(N):
-        free[k + 1] = A[k] @ free[k]
-        G[k + 1] = A[k] @ G[k]
-        G[k + 1, :, k * m:(k + 1) * m] += B[k]
-    return free, G
-
-
-def lifted_cost(dynamics, cost, x0, N):
-    """``J(u) = 1/2 u'H u + h'u + c`` over the stacked controls; returns ``(H, h, c)``."""
-    free, G = lifted_dynamics(dynamics, x0, N)
-    c = cost.stages(0, N)
-    n, m = c.QN.shape[0], c.R.shape[-1]
-    Q = np.broadcast_to(c.Q, (N, n, n))
-    q = np.broadcast_to(c.q, (N, n))
-    R = np.broadcast_to(c.R, (N, m, m))
-    r = np.broadcast_to(c.r, (N, m))
-    Gs, Gn, fs, fN = G[:N], G[N], free[:N], free[N]
-    H = np.einsum("kia,kij,kjb->ab", Gs, Q, Gs) + Gn.T @ c.QN @ Gn
-    idx = np.arange(N)
-    Hu = H.reshape(N, m, N, m)
-    Hu[idx, :, idx, :] += R
-    h = (np.einsum("kia,ki->a", Gs, np.einsum("kij,kj->ki", Q, fs) + q) + Gn.T @ (c.QN @ fN + c.qN)
-         + r.reshape(-1))
-    const = (0.5 * np.einsum("ki,kij,kj->", fs, Q, fs) + np.einsum("ki,ki->", q, fs)
-             + 0.5 * fN @ c.QN @ fN + c.qN @ fN + c.const)
-    return 0.5 * (H + H.T), h, float(const)
-
-
-def _gaussian(H, h, c, name):
-    """Mean, Cholesky factor of the precision and log Z of ``exp(-(1/2 u'Hu + h'u + c))``."""
-    try:
-        L = np.linalg.cholesky(H)
-    except np.linalg.LinAlgError:
-        raise ValueError(f"{name}: exp(-J) is not normalisable (its control Hessian is not positive "
-                         "definite), so P(u | H) of eq. (6.8) is undefined") from None
-    mean = -np.linalg.solve(H, h)
-    d = h.shape[0]
-    log_z = -c - 0.5 * h @ mean + 0.5 * d * np.log(2 * np.pi) - np.log(np.diag(L)).sum()
-    return mean, L, log_z
-
-
-def log_boltzmann(dynamics, cost, x0, us):
-    """``log P(u | H) = -J(u) - log Z`` (eqs. (6.8)-(6.9)); Gaussian in the stacked controls."""
-    us = np.asarray(us, float)
-    N = us.shape[0]
-    H, h, c = lifted_cost(dynamics, cost, x0, N)
-    _, _, log_z = _gaussian(H, h, c, "cost")
-    u = us.reshape(-1)
-    J = 0.5 * u @ H @ u + h @ u + c
-    return float(-J - log_z)
-
-
-def log_likelihood_ratio(dynamics, J0, J1, x0, us):
-    """``log Lambda(u) = log P(u|H0) - log P(u|H1)`` (eq. (6.7)) with the closed-form partition
-    functions. Negative values are evidence for H1 over H0 (nats)."""
-    return log_boltzmann(dynamics, J0, x0, us) - log_boltzmann(dynamics, J1, x0, us)
-
-
-def likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0):
-    """Minimiser of ``log Lambda(u) + alpha J1(u)`` from the two Gaussians' means and precisions
-    (not through the stage costs): solves ``((1+alpha) P1 - P0) u = (1+alpha) P1 mu1 - P0 mu0``.
-
-    By Theorem 6.4.2 and eq. (6.15) this equals the minimiser of ``(1 + alpha) J1 - J0``.
-    Returns the controls (N, m); raises ValueError if the objective is unbounded.
-    """
-    H0, h0, c0 = lifted_cost(dynamics, J0, x0, N)
-    H1, h1, c1 = lifted_cost(dynamics, J1, x0, N)
-    mu0, _, _ = _gaussian(H0, h0, c0, "J0")
-    mu1, _, _ = _gaussian(H1, h1, c1, "J1")
-    P = (1 + alpha) * H1 - H0
-    P = 0.5 * (P + P.T)
-    if np.linalg.eigvalsh(P)[0] <= 1e-9 * np.abs(H1).max():
-        raise ValueError("log Lambda + alpha J1 has no finite minimiser: (1+alpha) P1 - P0 is not "
-                         "positive definite")
-    u = np.linalg.solve(P, (1 + alpha) * H1 @ mu1 - H0 @ mu0)
-    return u.reshape(N, -1)
-
-
-# ---- several distractors: the QP of section 6.5 -----------------------------------------------
-
-def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL", tol=1e-9):
-    """Solve ``min J1 s.t. J1 - J0_i <= eta_i`` for every distractor ``J0_i`` (section 6.5) in cvxpy.
-
-    Each constraint is affine in ``u`` when the quadratic parts of ``J1`` and ``J0_i``
-    cancel (x' = u with eq. (6.17)) and a convex quadratic when ``H1 - H0_i`` is
-    positive semidefinite; otherwise the problem is not convex and a ValueError is
-    raised. Returns ``(xs, us, duals)``; ``duals[i]`` is the multiplier of constraint i,
-    so the solution minimises ``(1 + sum duals) J1 - sum duals_i J0_i`` (the Lagrangian).
-    """
-    if not len(distractors):
-        raise ValueError("distractors must list at least one hypothesis cost")
-    try:
-        etas = np.broadcast_to(np.asarray(etas, float), (len(distractors),))
-    except ValueError:
-        raise ValueError(f"etas must be a number or one per distractor ({len(distractors)}), got {etas!r}") from None
-    if not np.all(np.isfinite(etas)):
-        raise ValueError(f"etas must be finite, got {etas.tolist()}")
-    H1, h1, c1 = lifted_cost(dynamics, J1, x0, N)
-    u = cp.Variable(H1.shape[0])
-    cons = []
-    for i, J0 in enumerate(distractors):
-        H0, h0, c0 = lifted_cost(dynamics, J0, x0, N)
-        D = H1 - H0
-        affine = (h1 - h0) @ u + (c1 - c0)
-        if np.abs(D).max() <= tol * max(1.0, np.abs(H1).max()):
-            cons.append(affine <= etas[i])
-        elif np.linalg.eigvalsh(D)[0] >= -tol * np.abs(D).max():
-            cons.append(0.5 * cp.quad_form(u, cp.psd_wrap(D)) + affine <= etas[i])
-        else:
-            raise ValueError(f"distractors[{i}]: J1 - J0 has an indefinite quadratic part, so the "
-                             "constraint J1 - J0 <= eta is not convex")
-    prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(u, cp.psd_wrap(H1)) + h1 @ u), cons)
-    prob.solve(solver=solver)
-    if prob.status not in ("optimal", "optimal_inaccurate"):
-        raise ValueError(f"the multi-distractor QP is {prob.status} for etas={etas.tolist()}")
-    us = u.value.reshape(N, -1)
-    free, G = lifted_dynamics(dynamics, x0, N)
-    xs = free + G @ u.value
-    return xs, us, np.array([c.dual_value for c in cons], dtype=float).reshape(-1)
-
-
-def receding_horizon_qp(dynamics, J1, distractors, x0, N, eta_of_s, every=10, solver="CLARABEL"):
-    """Anticipative multi-distractor control: replan :func:`multi_distractor_qp` every ``every``
-    steps on the remaining horizon with ``eta = eta_of_s(t_i / N)`` (an increasing, i.e.
-    loosening, schedule plays the role of the increasing alpha of eq. (6.16)).
-    Returns ``(xs, us)``."""
-    if not isinstance(every, (int, np.integer)) or every < 1:
-        raise ValueError(f"every must be a positive integer, got {every!r}")
-    xs, us = [np.asarray(x0, float)], []
-    for start in range(0, N, every):
-        rest = N - start
-        plan_x, plan_u, _ = multi_distractor_qp(
-            dynamics.stages(start, rest), J1.stages(start, rest), [J.stages(start, rest) for J in distractors],
-            xs[-1], rest, eta_of_s(start / N), solver=solver)
-        steps = min(every, rest)
-        us.extend(plan_u[:steps])
-        xs.extend(plan_x[1:steps + 1])
-    return np.array(xs), np.array(us)
-
-
-# ---- helpers for the chapter's experiments ---------------------------------------------------
-
-def batch_costs(dynamics, cost, x0, us):
-    """``J(u)`` for a batch of control sequences ``us`` (B, N, m), through the lifted form."""
-    us = np.asarray(us, float)
-    H, h, c = lifted_cost(dynamics, cost, x0, us.shape[1])
-    U = us.reshape(len(us), -1)
-    return 0.5 * np.einsum("bi,ij,bj->b", U, H, U) + U @ h + c
-
-
-def sample_boltzmann(dynamics, cost, x0, N, size, rng):
-    """Draw ``size`` control sequences (size, N, m) from ``P(u | H) = exp(-J(u)) / Z`` (eq. (6.8))."""
-    H, h, c = lifted_cost(dynamics, cost, x0, N)
-    mean, L, _ = _gaussian(H, h, c, "cost")
-    z = rng.standard_normal((size, len(mean)))
-    # u = mean + L^{-T} z has covariance (L L')^{-1} = H^{-1}
-    u = mean + np.linalg.solve(L.T, z.T).T
-    return u.reshape(size, N, -1)
 
 
 def random_lq_hypotheses(rng, n=2, m=2, N=10):

@@ -2,7 +2,7 @@
 
 Every hypothesis cost of chapter 7 is a weighted sum of four features of a
 trajectory, discretised with ``N`` steps of ``dt = T / N`` (left Riemann sums,
-as :mod:`mutual.legibility` does)::
+as :mod:`mutual.motion.legibility` does)::
 
     J(u; w) = w_goal   |P x_N - g|^2                                  (eqs. 7.1, 7.3)
             + w_effort dt sum_k |u_k|^2                                (eqs. 7.1, 7.3)
@@ -15,8 +15,8 @@ constraint inferred in chapters 2-3 or a keep-out set of chapter 4), so a robot
 can evidence that it respects a learned constraint. Because costs are linear in
 the weights, the legible objective ``(1 + alpha) J1 - J0`` of eq. (6.15) is the
 same feature cost with weights ``(1 + alpha) w1 - w0``
-(:func:`mutual.legibility.legible_cost`), so H0, H1 and the legible problem
-share one compiled iLQR (:mod:`mutual.ilqr`).
+(:func:`mutual.motion.legibility.legible_cost`), so H0, H1 and the legible problem
+share one compiled iLQR (:mod:`mutual.motion.ilqr`).
 
 Dynamics: ``x' = u`` in the plane (Fig. 7.1), or the Dubins car of eq. (7.5),
 ``(x, y, theta)' = (v cos theta, v sin theta, u)`` with ``v = 3``, integrated
@@ -29,9 +29,9 @@ import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 
-from .figures import PALETTE
+from ..style import PALETTE
 from .ilqr import ILQRError, ilqr, solve_single_shooting, trajectory_cost, trajectory_cost_grad
-from .legibility import QuadraticCost, legible_cost, reaching_cost
+from .legibility import legible_cost, QuadraticCost, reaching_cost
 
 SPEED = 3.0  # v of eq. (7.5)
 FEATURES = ("goal", "effort", "hazard", "keep_out")
@@ -48,7 +48,7 @@ def dubins_step(x, u, dt, speed=SPEED):
 
     The car turns by ``u dt`` along an arc whose chord has length ``v dt sinc(u dt / 2)``
     and points at the mean heading ``theta + u dt / 2`` (finite and smooth as u -> 0).
-    The same integrator as :func:`mutual.dubins.dubins_step`, written in JAX.
+    The same integrator as :func:`mutual.supervision.dubins.dubins_step`, written in JAX.
     """
     turn = u[0] * dt
     chord = speed * dt * jnp.sinc(turn / (2 * jnp.pi))  # jnp.sinc(z) = sin(pi z) / (pi z)
@@ -174,7 +174,7 @@ def legible_weights(w1, w0, alpha):
 
 
 def problem(task, weights):
-    """``(dynamics, running_cost, terminal_cost, x0, params)`` for :mod:`mutual.ilqr`'s functions."""
+    """``(dynamics, running_cost, terminal_cost, x0, params)`` for :mod:`mutual.motion.ilqr`'s functions."""
     return _step, _running, _terminal, task.x0, task.params(weights)
 
 
@@ -269,8 +269,8 @@ def relative_gradient(task, weights, result):
 
 
 def lq_hypothesis_costs(task, w0, w1, alpha=LEGIBLE_ALPHA):
-    """Fig. 7.1's objectives as chapter 6's :class:`mutual.legibility.QuadraticCost` (x' = u, no keep-out),
-    for the exact Riccati solution by :func:`mutual.legibility.solve`."""
+    """Fig. 7.1's objectives as chapter 6's :class:`mutual.motion.legibility.QuadraticCost` (x' = u, no keep-out),
+    for the exact Riccati solution by :func:`mutual.motion.legibility.solve`."""
     if task.controls != 2 or np.any(np.asarray(w0)[2:] != 0) or np.asarray(w1)[3] != 0:
         raise ValueError("lq_hypothesis_costs needs x' = u, H0 without hazard and no keep-out weight")
     if np.any(np.asarray(w1)[:2] != np.asarray(w0)[:2]):

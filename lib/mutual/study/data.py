@@ -3,7 +3,7 @@
 Trial table (one row per participant x trial x measure), ``TRIAL_COLUMNS``:
 
 * ``participant`` -- participant id, a string (``P01``, ...);
-* ``comparison``  -- the pair of teams, e.g. ``Standard-Learned`` (:func:`mutual.study_design.comparison_label`);
+* ``comparison``  -- the pair of teams, e.g. ``Standard-Learned`` (:func:`mutual.study.design.comparison_label`);
 * ``order``       -- 1 or 2, the position of this trial within its comparison;
 * ``treatment``   -- the team's safe set: ``Standard``, ``Learned`` or ``Conservative``;
 * ``task_version``-- 1..6, the randomized task layout of this trial;
@@ -13,21 +13,20 @@ Trial table (one row per participant x trial x measure), ``TRIAL_COLUMNS``:
   per team: "I trusted this team", ..., "I preferred this team");
 * ``value``       -- the number.
 
-Phase II intervention table: the schema of :mod:`mutual.supervisor` (``participant``, ``trial``
+Phase II intervention table: the schema of :mod:`mutual.supervision.supervisor` (``participant``, ``trial``
 = the scene watched, ``time`` into the scene, the robot state ``x``, ``y``, ``theta`` relative to
 the obstacle centre when the supervisor intervened; optional ``obstacle_x``, ``obstacle_y``).
 The same files hold a real study's data; the simulated ones carry ``simulated`` in their names.
 
-Generator step: ``python -m mutual.study_data`` runs the simulated study
-(:func:`mutual.teaming.simulate_study`, full size) and writes ``data/ch5_simulated_*.csv``.
+The simulated study's tables are written by :func:`mutual.study.cohort.write_simulated_study`.
 """
 
 import numpy as np
 import pandas as pd
 
-from .atomic import atomic_path
-from .supervisor import validate_interventions
-from .study_design import TREATMENTS, comparison_label
+from ..atomic import atomic_path
+from ..supervision.supervisor import validate_interventions
+from .design import TREATMENTS, comparison_label
 
 TRIAL_COLUMNS = ["participant", "comparison", "order", "treatment", "task_version", "trial", "measure", "value"]
 OBJECTIVE_MEASURES = ("trips", "interventions", "collisions", "false_positives", "score")
@@ -127,7 +126,7 @@ def _validator(kind):
 def illustrative_questionnaire(design, seed=0):
     """ILLUSTRATIVE Likert answers (not a model of people) to exercise the subjective analysis.
 
-    For every trial of ``design`` (a :func:`mutual.study_design.study_design` table) and every
+    For every trial of ``design`` (a :func:`mutual.study.design.study_design` table) and every
     measure of ``LIKERT_MEASURES``, an answer drawn uniformly from 1..7, independent of the
     treatment. These numbers say nothing about the thesis's participants.
     """
@@ -137,22 +136,3 @@ def illustrative_questionnaire(design, seed=0):
     rows["measure"] = np.tile(LIKERT_MEASURES, len(design))
     rows["value"] = rng.integers(LIKERT_RANGE[0], LIKERT_RANGE[1] + 1, size=len(rows))
     return validate_trials(rows[TRIAL_COLUMNS])
-
-
-def _main():
-    """Generator step: run the full simulated study and write ``data/ch5_simulated_*.csv``."""
-    from .paths import DATA
-    from .study_design import DESIGN_COLUMNS
-    from .teaming import simulate_study, study_value_functions
-
-    study = simulate_study(*study_value_functions(quick=False, progress=True), seed=0)
-    write_table(study.trials, DATA / "ch5_simulated_phase3.csv", "trials")
-    write_table(study.interventions, DATA / "ch5_simulated_phase2_interventions.csv", "interventions")
-    analysed = study.trials.drop_duplicates(["participant", "trial"])[DESIGN_COLUMNS].reset_index(drop=True)
-    write_table(illustrative_questionnaire(analysed, seed=0), DATA / "ch5_illustrative_questionnaire.csv", "trials")
-    with atomic_path(DATA / "ch5_simulated_participants.csv") as tmp:
-        study.participants.to_csv(tmp, index=False, float_format="%.6g")
-
-
-if __name__ == "__main__":
-    _main()

@@ -1,12 +1,12 @@
 """Build ``figures/REPRODUCTION.md``: every claim of the thesis beside the value
-this code reproduces, with a verdict (``python -m mutual.report``)."""
+this code reproduces, with a verdict (``python -m mutual.compendium.report``)."""
 
 import json
 import sys
 
 import pandas as pd
 
-from .atomic import write_text
+from ..atomic import write_text
 from .claims import VERDICTS, load_claims, verdict
 from .paths import figures_dir, results_dir
 
@@ -48,7 +48,7 @@ def report_table():
     for claim in claims.to_dict("records"):
         entry = results.get(claim["id"])
         got = entry["value"] if entry else None
-        note = entry["note"] if entry else ""
+        note = "; ".join(s for s in (entry.get("note", ""), entry.get("computed_by", "")) if s) if entry else ""
         rows.append({"id": claim["id"], "chapter": int(claim["chapter"]), "section": claim["section"],
                      "claim": claim["statement"], "thesis": claim["thesis_value"],
                      "reproduced": _show(got) + (f" ({note})" if note else ""),

@@ -4,8 +4,8 @@ states and on the compass of actions, with constraints marked by a red X."""
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .figures import PALETTE
-from .mdp import GRID_ACTIONS, GRID_DELTAS
+from ..style import PALETTE
+from .gridworld import GRID_ACTIONS, GRID_DELTAS
 
 _COMPASS = {a: (1 + dy, 1 + dx) for a, (dx, dy) in zip(range(len(GRID_ACTIONS)), GRID_DELTAS)}  # (row, col) in 3x3
 

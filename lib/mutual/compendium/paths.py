@@ -2,17 +2,19 @@
 
 Outputs go to ``figures/`` unless ``MUTUAL_OUTPUT_DIR`` points elsewhere (the
 notebook tests use a temporary folder so that quick runs never overwrite the
-committed figures); caches go to ``.cache/`` unless ``MUTUAL_CACHE_DIR`` is set.
+committed figures). The library's caches (:mod:`mutual.cache`) go to ``CACHE`` (``.cache/``)
+when the Makefile or the tests run them.
 """
 
 import os
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 DATA = ROOT / "data"
 NOTEBOOKS = ROOT / "notebooks"
 BUILD = ROOT / "build"
 CLAIMS = DATA / "paper_claims.csv"
+CACHE = ROOT / ".cache"
 
 
 def figures_dir() -> Path:
@@ -23,8 +25,3 @@ def figures_dir() -> Path:
 def results_dir() -> Path:
     """Folder for the per-notebook result files read by the reproduction report."""
     return figures_dir() / "results"
-
-
-def cache_dir() -> Path:
-    """Folder for expensive cached results (``MUTUAL_CACHE_DIR`` or ``.cache/``)."""
-    return Path(os.environ.get("MUTUAL_CACHE_DIR", ROOT / ".cache"))

@@ -4,12 +4,12 @@
 A chance constraint on state x_bar with threshold psi allows action a in state
 x only if S(x, a, x_bar) <= psi (eq. 3.1); psi = 0 forbids x_bar outright and
 psi = 1 is vacuous. Bundled with forbidden actions this gives the allowed-action
-mask Phi_C(a, x) of eq. (3.2), the input of every backup in :mod:`mutual.mdp`.
+mask Phi_C(a, x) of eq. (3.2), the input of every backup in :mod:`mutual.constraints.mdp`.
 """
 
 import numpy as np
 
-from .mdp import check_demonstrations
+from .demonstrations import check_demonstrations
 
 
 def _nonzeros(mdp):

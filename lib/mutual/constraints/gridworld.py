@@ -1,0 +1,88 @@
+"""The gridworld of Section 3.3: eight compass moves that slip to one of the other seven
+directions, a loiter action, a running reward of minus the distance moved, a terminal reward that
+pays for reaching the goal."""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .mdp import MDP
+
+GRID_ACTIONS = ("E", "NE", "N", "NW", "W", "SW", "S", "SE", "loiter")
+GRID_DELTAS = np.array([(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1), (0, 0)])
+
+
+@dataclass(frozen=True, eq=False)
+class Gridworld:
+    """A W x H gridworld MDP (Section 3.3) and its layout; state = col + width * row."""
+
+    width: int
+    height: int
+    start: tuple
+    goal: tuple
+    slip: float
+    mdp: MDP
+
+    def state(self, col, row):
+        return col + self.width * row
+
+    def coords(self, state):
+        """(col, row) of a state index (or arrays of them)."""
+        return np.asarray(state) % self.width, np.asarray(state) // self.width
+
+    def label(self, kind, index):
+        """'state (col, row)' or 'action NE' for a ``kind`` ("state"/"action") and its index."""
+        if kind == "state":
+            return "state ({}, {})".format(*(int(v) for v in self.coords(index)))
+        return f"action {GRID_ACTIONS[index]}"
+
+
+def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=50.0, sparse=False):
+    """The thesis's gridworld (Section 3.3).
+
+    Actions: the eight compass moves ``GRID_ACTIONS[:8]`` and ``loiter``. A move
+    goes in its commanded direction with probability 1 - ``slip`` and otherwise
+    in one of the other seven compass directions (``slip / 7`` each); loitering
+    stays put surely. Off-grid rule: a commanded move off the grid leaves the
+    agent in place, and a slip never leaves the grid -- the slip probability is
+    spread evenly over the other directions that stay on it (so a slip never
+    lands the agent back where it stood). Reward: r(x, a) = -(length of the commanded move): 1 for
+    orthogonal, sqrt(2) for diagonal moves, 0 for loitering, so the agent
+    minimises the distance it travels and loiters free of charge once at the
+    goal. Terminal reward: 0 at the goal and -``miss_penalty`` elsewhere, so the
+    agent must reach the goal within ``horizon`` steps (default 2 max(W, H), room
+    for a detour around a constraint).
+    The agent starts at ``start``; positions are (col, row), row 0 at the bottom.
+    """
+    for name, v in (("width", width), ("height", height)):
+        if not isinstance(v, (int, np.integer)) or v < 2:
+            raise ValueError(f"{name}: must be an integer >= 2, got {v!r}")
+    for name, (c, r) in (("start", start), ("goal", goal)):
+        if not (0 <= c < width and 0 <= r < height):
+            raise ValueError(f"{name}: {(c, r)} is off the {width} x {height} grid")
+    if not 0 <= slip <= 1:
+        raise ValueError(f"slip: must lie in [0, 1], got {slip!r}")
+    horizon = 2 * max(width, height) if horizon is None else horizon
+    X, A = width * height, len(GRID_ACTIONS)
+    col, row = np.arange(X) % width, np.arange(X) // width
+    nc, nr = col[:, None] + GRID_DELTAS[None, :8, 0], row[:, None] + GRID_DELTAS[None, :8, 1]
+    on_grid = (nc >= 0) & (nc < width) & (nr >= 0) & (nr < height)                  # (X, 8)
+    landing = np.where(on_grid, nc + width * nr, np.arange(X)[:, None])             # (X, 8)
+    commanded = np.eye(8, dtype=bool)[None]                                           # (1, a, d)
+    slips = on_grid[:, None, :] & ~commanded                                          # (X, a, d)
+    prob = np.where(commanded, 1.0 - slip, slip * slips / slips.sum(axis=2, keepdims=True))
+    rows = np.concatenate([np.repeat(np.arange(X)[:, None] * A + np.arange(8), 8), np.arange(X) * A + 8])
+    cols = np.concatenate([np.broadcast_to(landing[:, None, :], (X, 8, 8)).ravel(), np.arange(X)])
+    vals = np.concatenate([prob.ravel(), np.ones(X)])
+    keep = vals > 0
+    P = sp.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(X * A, X))
+    reward = -np.broadcast_to(np.hypot(GRID_DELTAS[:, 0], GRID_DELTAS[:, 1]), (X, A))
+    g = goal[0] + width * goal[1]
+    w = np.full(X, -float(miss_penalty))
+    w[g] = 0.0
+    p0 = np.zeros(X)
+    p0[start[0] + width * start[1]] = 1.0
+    S = P if sparse else P.toarray().reshape(X, A, X)
+    return Gridworld(width, height, tuple(start), tuple(goal), float(slip),
+                     MDP(S, reward, horizon, terminal_reward=w, initial=p0))

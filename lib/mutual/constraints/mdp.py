@@ -1,0 +1,185 @@
+"""Tabular finite-horizon Markov decision processes (Section 2.2.1) and their
+soft, maximum-causal-entropy Bellman backup (eqs. 2.16-2.21), in log space.
+
+An :class:`MDP` holds the transition tensor S(x, a, x') -- dense ``(X, A, X)``
+or a ``scipy.sparse`` matrix of shape ``(X*A, X)`` whose row ``x*A + a`` is
+S(x, a, .) -- the running reward r(x, a), the terminal reward w(x), the horizon
+T and the initial state distribution. A trajectory collects r(x_t, a_t) for
+t = 0..T-1 and w(x_T) (eq. 2.3), so V_0(x) = log Z(x) (eq. 2.24).
+
+Constraints enter as an allowed-action mask Phi_C(x, a) (eq. 2.12 or 3.2):
+boolean ``(X, A)``, or ``(X, A, K)`` for K constraint sets backed up at once.
+Forbidden actions get Q = -inf; a state with no allowed action gets V = -inf,
+and -inf values never turn into NaN (0 * -inf is avoided explicitly).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+_ATOL = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class MDP:
+    """A validated finite-horizon MDP (Section 2.2.1).
+
+    ``transitions``: S(x, a, x') as a dense ``(X, A, X)`` array or a sparse
+    ``(X*A, X)`` matrix; ``reward``: r(x, a) as ``(X, A)`` (or ``(X,)``, the same
+    for every action); ``terminal_reward``: w(x) as ``(X,)`` (default 0);
+    ``horizon``: T >= 1; ``initial``: p_0 as ``(X,)`` (default uniform).
+    """
+
+    transitions: object
+    reward: np.ndarray
+    horizon: int
+    terminal_reward: np.ndarray = None
+    initial: np.ndarray = None
+
+    def __post_init__(self):
+        P, n_states, n_actions = _check_transitions(self.transitions)
+        reward = np.asarray(self.reward, dtype=float)
+        if reward.shape == (n_states,):
+            reward = np.repeat(reward[:, None], n_actions, axis=1)
+        if reward.shape != (n_states, n_actions):
+            raise ValueError(f"reward: shape {reward.shape} should be (X, A) = {(n_states, n_actions)} or (X,)")
+        if not np.all(np.isfinite(reward)):
+            raise ValueError("reward: must be finite everywhere")
+        w = np.zeros(n_states) if self.terminal_reward is None else np.asarray(self.terminal_reward, dtype=float)
+        if w.shape != (n_states,):
+            raise ValueError(f"terminal_reward: shape {w.shape} should be (X,) = ({n_states},)")
+        if not np.all(np.isfinite(w)):
+            raise ValueError("terminal_reward: must be finite everywhere")
+        if isinstance(self.horizon, bool) or not isinstance(self.horizon, (int, np.integer)) or self.horizon < 1:
+            raise ValueError(f"horizon: must be an integer >= 1, got {self.horizon!r}")
+        p0 = np.full(n_states, 1.0 / n_states) if self.initial is None else np.asarray(self.initial, dtype=float)
+        if p0.shape != (n_states,):
+            raise ValueError(f"initial: shape {p0.shape} should be (X,) = ({n_states},)")
+        if np.any(p0 < 0) or not np.isclose(p0.sum(), 1.0, atol=_ATOL):
+            raise ValueError("initial: must be a probability distribution (non-negative, summing to 1)")
+        for name, value in (("transitions", P), ("reward", reward), ("terminal_reward", w),
+                            ("horizon", int(self.horizon)), ("initial", p0)):
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "n_states", n_states)
+        object.__setattr__(self, "n_actions", n_actions)
+
+    @property
+    def is_sparse(self):
+        return sp.issparse(self.transitions)
+
+    def dense_transitions(self):
+        """S(x, a, x') as a dense ``(X, A, X)`` array."""
+        P = self.transitions.toarray() if self.is_sparse else self.transitions
+        return P.reshape(self.n_states, self.n_actions, self.n_states)
+
+
+def _check_transitions(S):
+    """Return S as a ``(X*A, X)`` float array or CSR matrix, checking it is stochastic."""
+    if sp.issparse(S):
+        if S.ndim != 2 or S.shape[1] == 0 or S.shape[0] % S.shape[1]:
+            raise ValueError(f"transitions: a sparse S must have shape (X*A, X), got {S.shape}")
+        P = sp.csr_matrix(S, dtype=float)
+        P.sum_duplicates()
+        values, row_sums = P.data, np.asarray(P.sum(axis=1)).ravel()
+        n_states = S.shape[1]
+    else:
+        S = np.asarray(S, dtype=float)
+        if S.ndim != 3 or S.shape[0] != S.shape[2] or S.shape[0] == 0 or S.shape[1] == 0:
+            raise ValueError(f"transitions: a dense S must have shape (X, A, X), got {S.shape}")
+        n_states = S.shape[0]
+        P = np.ascontiguousarray(S.reshape(-1, n_states))
+        values, row_sums = P, P.sum(axis=1)
+    if not np.all(np.isfinite(values)) or np.any(values < 0):
+        raise ValueError("transitions: S must be finite and non-negative")
+    bad = np.flatnonzero(np.abs(row_sums - 1.0) > _ATOL)
+    if bad.size:
+        x, a = divmod(int(bad[0]), P.shape[0] // n_states)
+        raise ValueError(f"transitions: S(x, a, .) must sum to 1; S({x}, {a}, .) sums to {row_sums[bad[0]]:.6g}")
+    return P, n_states, P.shape[0] // n_states
+
+
+# ---------------------------------------------------------------- soft backup
+
+def expected_next(mdp, values):
+    """E_{x' ~ S(x, a, .)} V(x') for ``values`` of shape (X,) or (X, K) -> (X, A[, K]).
+
+    Terms with S = 0 contribute nothing even where V = -inf; any positive
+    chance of reaching a V = -inf state makes the expectation -inf.
+    """
+    V = np.asarray(values, dtype=float)
+    dead = np.isneginf(V)
+    if dead.any():
+        EV = _times_transitions(mdp, np.where(dead, 0.0, V))
+        EV[_times_transitions(mdp, dead.astype(float)) > 0] = -np.inf
+    else:
+        EV = _times_transitions(mdp, V)
+    return EV.reshape((mdp.n_states, mdp.n_actions) + V.shape[1:])
+
+
+def _times_transitions(mdp, V):
+    """S as a (X*A, X) matrix times V; scipy's sparse product runs column by column,
+    which is about twice as fast on a column-major V."""
+    if mdp.is_sparse:
+        return np.asarray(mdp.transitions @ np.asfortranarray(V))
+    return mdp.transitions @ V
+
+
+def masked_logsumexp(Q, forbidden, axis=1):
+    """log sum_a exp(Q) over the allowed entries; overwrites ``Q`` (eq. 2.21).
+
+    ``forbidden`` is the complement of Phi_C (broadcastable to Q). All-forbidden
+    slices give -inf without warnings.
+    """
+    if forbidden is not None:
+        np.copyto(Q, -np.inf, where=forbidden)
+    m = Q.max(axis=axis, keepdims=True)
+    m[~np.isfinite(m)] = 0.0
+    np.subtract(Q, m, out=Q)
+    np.exp(Q, out=Q)
+    with np.errstate(divide="ignore"):
+        return np.log(Q.sum(axis=axis)) + np.squeeze(m, axis=axis)
+
+
+def check_mask(mdp, mask, name="mask"):
+    """Validate an allowed-action mask Phi_C: boolean (X, A) or (X, A, K); None means all allowed."""
+    if mask is None:
+        return np.ones((mdp.n_states, mdp.n_actions), dtype=bool)
+    mask = np.asarray(mask)
+    if mask.dtype != bool:
+        raise ValueError(f"{name}: must be a boolean array, got dtype {mask.dtype}")
+    if mask.ndim not in (2, 3) or mask.shape[:2] != (mdp.n_states, mdp.n_actions):
+        raise ValueError(f"{name}: shape {mask.shape} should be (X, A) or (X, A, K) with (X, A) = "
+                         f"{(mdp.n_states, mdp.n_actions)}")
+    return mask
+
+
+def soft_bellman_backup(mdp, mask=None):
+    """The constrained soft Bellman backup, eqs. (2.19)-(2.21), for one constraint set.
+
+    Returns ``(V, Q)`` with V of shape (T+1, X) (V[T] = w, V[0] = log Z) and
+    Q of shape (T, X, A) (Q = -inf for forbidden actions).
+    """
+    mask = check_mask(mdp, mask)
+    if mask.ndim != 2:
+        raise ValueError("mask: soft_bellman_backup takes one (X, A) mask; use log_partition for a batch")
+    T, forbidden = mdp.horizon, ~mask
+    V = np.empty((T + 1, mdp.n_states))
+    Q = np.empty((T, mdp.n_states, mdp.n_actions))
+    V[T] = mdp.terminal_reward
+    for t in range(T - 1, -1, -1):
+        Q[t] = mdp.reward + expected_next(mdp, V[t + 1])
+        Q[t][forbidden] = -np.inf
+        V[t] = masked_logsumexp(Q[t].copy(), None)
+    return V, Q
+
+
+def soft_policy(mdp, mask=None):
+    """The constrained Boltzmann policy P_C(a | x, t) = Phi_C exp(Q - V), eq. (2.19): (T, X, A).
+
+    A state with no allowed action (V = -inf) gets an all-zero row.
+    """
+    V, Q = soft_bellman_backup(mdp, mask)
+    with np.errstate(invalid="ignore"):
+        pi = np.exp(Q - V[:-1, :, None])
+    return np.nan_to_num(pi, nan=0.0)

@@ -1,0 +1,218 @@
+"""A SIMULATED chapter 5 study (Sec. 5.2): recruits, their Phase II interventions and fitted
+safe sets (chapter 4's estimator), and the Phase III teaming trials of the whole design.
+
+Phase II (supervisor data): each simulated participant is a noisy idealized supervisor
+(Sec. 4.3) with an internal Dubins model ``w_max``, a margin ``mu`` and a noise ``sigma``.
+They watch robots drive straight at an obstacle and intervene at the first state with
+``V_S(x) + w <= mu``, ``w ~ N(0, sigma^2)`` drawn once per judgement (per scene). The
+Learned safe set is fitted to the intervention states with the chapter 4 estimator
+(eqs. 4.8-4.12) and used at ``alpha = mu_hat`` (Sec. 5.2.2). Participants whose Learned
+unsafe set does not contain the Standard unsafe set are excluded (Sec. 5.2.1).
+"""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..atomic import atomic_path
+from ..supervision.dubins import SPEED, TRUE_W_MAX
+from ..supervision.reachability import (FULL_GRID, QUICK_GRID, ValueFunction, avoid_value_function,
+                                        unsafe_set_contains, value_library)
+from ..supervision.supervisor import approach_scenes, NoisySupervisor, validate_interventions
+from ..supervision.fit import fit_supervisor
+from .data import OBJECTIVE_MEASURES, TRIAL_COLUMNS, illustrative_questionnaire, validate_trials, write_table
+from .design import DESIGN_COLUMNS, TREATMENTS, study_design
+from .teaming import OBSTACLE_RADIUS, Team, TeamingConfig, TeamingRecord, simulate_teaming
+
+
+# the supervisor library of Fig. 4.2 (w_max between 0 and 3, Sec. 5.2.1); 1.0 is the true robot
+STUDY_W_MAXES = (0.375, 0.5, 0.625, 0.75, 1.0, 1.5, 2.0, 3.0)
+
+
+# twelve recruits spread as Fig. 5.5 describes (3 / 3 / 5 analysed) plus one who overestimates agility
+RECRUIT_KINDS = ("standard-like",) * 3 + ("conservative-like",) * 3 + ("gradual",) * 5 + ("agile",)
+
+
+def simulated_recruits(library, kinds=RECRUIT_KINDS, seed=0):
+    """SIMULATED participants: one :class:`NoisySupervisor` per entry of ``kinds`` (Fig. 5.5 spread).
+
+    ``standard-like``: ``w_max = 1``, ``mu ~ U(0.1, 0.35)``; ``conservative-like``: ``w_max = 1``,
+    ``mu ~ U(0.85, 1.15)`` (about the Conservative set, whose doubled obstacle is ``V >= r``);
+    ``gradual``: ``w_max`` one of 0.375 / 0.5 / 0.625 (turns earlier, gentler arcs), ``mu ~ U(0.2, 0.6)``;
+    ``agile``: ``w_max = 2`` (overestimates agility), ``mu ~ U(0, 0.1)``. Noise ``sigma ~ U(0.03, 0.08)``
+    (small: with larger noise the estimator of eq. 4.12 drifts to the flattest library member).
+    All ``w_max`` must be library members. Returns (DataFrame of the parameters, list of supervisors).
+    """
+    rng = np.random.default_rng(seed)
+    spec = {"standard-like": ((1.0,), (0.1, 0.35)), "conservative-like": ((1.0,), (0.85, 1.15)),
+            "gradual": ((0.375, 0.5, 0.625), (0.2, 0.6)), "agile": ((2.0,), (0.0, 0.1))}
+    rows, sups = [], []
+    for i, kind in enumerate(kinds):
+        if kind not in spec:
+            raise ValueError(f"unknown participant kind {kind!r}; expected one of {sorted(spec)}")
+        choices, (lo, hi) = spec[kind]
+        w = float(rng.choice(choices))
+        mu, sigma = float(rng.uniform(lo, hi)), float(rng.uniform(0.03, 0.08))
+        sups.append(NoisySupervisor(library[library.index_of(w)], mu, sigma))
+        rows.append((f"P{i + 1:02d}", kind, w, mu, sigma))
+    return pd.DataFrame(rows, columns=["participant", "kind", "w_max", "mu", "sigma"]), sups
+
+
+def phase2_interventions(supervisor, n_scenes, rng, start_distance=7.5, dt=0.01):
+    """Phase II: where ``supervisor`` intervenes on ``n_scenes`` straight approaches (Sec. 5.2.1).
+
+    Scenes from :func:`mutual.supervision.supervisor.approach_scenes`, one judgement noise per scene
+    (:meth:`NoisySupervisor.first_interventions`). Returns an interventions table in the
+    :mod:`mutual.supervision.supervisor` CSV schema without the participant column (trial = scene, time =
+    seconds into the scene); scenes in which the supervisor never intervenes are absent.
+    """
+    r = supervisor.value_fn.obstacle_radius
+    scenes = approach_scenes(n_scenes, rng, r, start_distance, dt=dt)
+    states, idx = supervisor.first_interventions(scenes, rng)
+    time = np.hypot(*(states[:, :2] - scenes[idx, 0, :2]).T) / SPEED
+    return pd.DataFrame({"trial": idx, "time": time, "x": states[:, 0], "y": states[:, 1], "theta": states[:, 2]})
+
+
+def estimator_recovery(library, w_maxes, mu, sigmas, n_scenes=40, repeats=10, seed=0):
+    """How often the estimator of eq. (4.12) recovers a simulated supervisor's ``w_max``.
+
+    For each true ``w_max`` (a library member) and judgement noise ``sigma``, ``repeats`` simulated
+    Phase II sessions of ``n_scenes`` are fitted (``fit_supervisor``, MLE); returns a DataFrame with
+    the share of exact recoveries and the mean fitted ``w_max``.
+    """
+    rng = np.random.default_rng(seed)
+    rows = []
+    for w in w_maxes:
+        for sigma in sigmas:
+            sup = NoisySupervisor(library[library.index_of(w)], mu, sigma)
+            fits = [fit_supervisor(library, phase2_interventions(sup, n_scenes, rng)[["x", "y", "theta"]].to_numpy()).w_max
+                    for _ in range(repeats)]
+            rows.append({"true w_max": w, "sigma": sigma, "recovered": float(np.mean(np.isclose(fits, w))),
+                         "mean fitted w_max": float(np.mean(fits))})
+    return pd.DataFrame(rows)
+
+
+def learned_set_cluster(w_max, mu, gradual_below=0.75, conservative_from=0.5):
+    """Fig. 5.5's kinds of Learned set: ``gradual`` when the fitted ``w_max < gradual_below``, else
+    ``conservative-like`` when ``mu >= conservative_from`` (half way to the doubled obstacle,
+    whose safe set is ``V >= r``), else ``standard-like``."""
+    if w_max < gradual_below:
+        return "gradual"
+    return "conservative-like" if mu >= conservative_from else "standard-like"
+
+
+def fraction_inside(value, states, level=0.0):
+    """(fraction, count) of ``states`` inside the safe set ``{V >= level}`` (Table 5.1 left; Fig. 5.6)."""
+    v = value.interp(states, fill_value=np.inf)
+    return float(np.mean(v >= level)), int(np.sum(v >= level))
+
+
+def study_value_functions(quick=False, progress=False):
+    """The supervisor library over ``STUDY_W_MAXES`` (obstacle radius 1) and the Conservative value
+    function (true dynamics, obstacle radius doubled), on the quick or full grid (disk-cached)."""
+    grid = QUICK_GRID if quick else FULL_GRID
+    library = value_library(STUDY_W_MAXES, OBSTACLE_RADIUS, grid_spec=grid, progress=progress)
+    conservative = avoid_value_function(TRUE_W_MAX, 2 * OBSTACLE_RADIUS, grid_spec=grid, progress=progress)
+    return library, conservative
+
+
+@dataclass
+class Study:
+    """A SIMULATED study: ``participants`` (generating parameters, fit, exclusion), Phase II
+    ``interventions`` (supervisor CSV schema), Phase III ``trials`` (tidy schema of
+    :mod:`mutual.study.data`), the ``design``, per-participant ``fits`` and ``supervisors``,
+    the Standard and Conservative value functions, the wide per-trial ``summary`` (with the
+    encounter counts) and a ``record`` of one trial (Fig. 5.3)."""
+    participants: pd.DataFrame
+    interventions: pd.DataFrame
+    trials: pd.DataFrame
+    summary: pd.DataFrame
+    design: pd.DataFrame
+    fits: dict
+    supervisors: dict
+    standard: ValueFunction
+    conservative: ValueFunction
+    record: TeamingRecord
+    simulated: bool = True
+
+
+def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), seed=0, kinds=RECRUIT_KINDS):
+    """Simulate Phase II and Phase III for recruits of ``kinds`` (Sec. 5.2), all trials in one batch.
+
+    Phase II: ``n_scenes`` approaches per recruit; the Learned set is the MLE fit (eq. 4.12,
+    ``alpha = mu*``); recruits whose Learned unsafe set ``{V < mu*}`` does not contain the Standard one
+    (:func:`mutual.supervision.reachability.unsafe_set_contains` at ``level = mu*``) are excluded. Phase III:
+    the design of :func:`mutual.study.design.study_design` for all recruits, run for those
+    who remain (Standard: ``w_max = 1``, ``alpha = 0``; Learned: the fit; Conservative:
+    obstacle doubled, ``alpha = 0``); the supervisor is the recruit's own noisy model.
+    """
+    standard = library[library.index_of(TRUE_W_MAX)]
+    if conservative.grid_spec != standard.grid_spec:
+        raise ValueError("conservative must share the library's grid")
+    rng = np.random.default_rng(seed)
+    people, sups = simulated_recruits(library, kinds, seed)
+    tables, fits, extra = [], {}, []
+    for pid, sup in zip(people["participant"], sups):
+        table = phase2_interventions(sup, n_scenes, rng).assign(participant=pid)
+        states = table[["x", "y", "theta"]].to_numpy()
+        fit = fit_supervisor(library, states, prior="mle")
+        fits[pid] = fit
+        extra.append((len(table), fit.w_max, fit.mu, fit.sigma,
+                      not unsafe_set_contains(fit.value_fn, standard, level=fit.mu)))
+        tables.append(table)
+    people[["n_interventions", "w_max_hat", "mu_hat", "sigma_hat", "excluded"]] = pd.DataFrame(extra)
+    interventions = validate_interventions(pd.concat(tables, ignore_index=True)[
+        ["participant", "trial", "time", "x", "y", "theta"]])
+    design = study_design(len(kinds), seed)
+    design["participant"] = design["participant"].map(lambda i: f"P{i:02d}")
+    keep = design[design["participant"].isin(people.loc[~people["excluded"], "participant"])].reset_index(drop=True)
+    by_pid = dict(zip(people["participant"], sups))
+    team_of = {"Standard": lambda pid: Team(standard, 0.0), "Conservative": lambda pid: Team(conservative, 0.0),
+               "Learned": lambda pid: Team(fits[pid].value_fn, fits[pid].mu)}
+    teams = [team_of[t](pid) for pid, t in zip(keep["participant"], keep["treatment"])]
+    counts, record = simulate_teaming(teams, [by_pid[p] for p in keep["participant"]],
+                                      keep["task_version"].tolist(), config, seed, record=0)
+    wide = pd.concat([keep, counts], axis=1)
+    trials = wide.melt(id_vars=[c for c in keep.columns], value_vars=list(OBJECTIVE_MEASURES), var_name="measure")
+    trials = validate_trials(trials[TRIAL_COLUMNS].sort_values(["participant", "trial"], kind="stable"))
+    return Study(people, interventions, trials.reset_index(drop=True), wide, design, fits, by_pid, standard,
+                 conservative, record)
+
+
+def predicted_and_observed(study):
+    """Table 5.1 from a study: Phase II interventions inside each safe set (the model's predicted
+    false positives relative to Standard) and Phase III average false positives per trial (observed
+    relative to Standard), over the analysed participants."""
+    people = study.participants[~study.participants["excluded"]]
+    iv = study.interventions[study.interventions["participant"].isin(people["participant"])]
+    states = iv[["x", "y", "theta"]].to_numpy()
+    learned = np.zeros(len(iv), bool)
+    for pid, idx in iv.groupby("participant").indices.items():
+        learned[idx] = study.fits[pid].value_fn.interp(states[idx], fill_value=np.inf) >= study.fits[pid].mu
+    inside = {"Standard": study.standard.interp(states, fill_value=np.inf) >= 0,
+              "Conservative": study.conservative.interp(states, fill_value=np.inf) >= 0, "Learned": learned}
+    fp = study.trials[study.trials["measure"] == "false_positives"]
+    per_person = fp.groupby(["participant", "treatment"])["value"].mean().unstack()
+    rows = []
+    for t in TREATMENTS:
+        rows.append({"safe set": t, "interventions in safe set": int(inside[t].sum()), "interventions": len(states),
+                     "predicted F.P. vs Std.": inside[t].sum() / inside["Standard"].sum(),
+                     "average F.P.": float(per_person[t].mean()),
+                     "observed F.P. vs Std.": float(per_person[t].mean() / per_person["Standard"].mean())})
+    return pd.DataFrame(rows)
+
+
+def write_simulated_study(study, folder):
+    """Write a simulated ``study``'s tables into ``folder``: ``ch5_simulated_phase3.csv`` (trials),
+    ``ch5_simulated_phase2_interventions.csv``, ``ch5_simulated_participants.csv`` and the
+    ILLUSTRATIVE ``ch5_illustrative_questionnaire.csv`` (seed 0); each file atomically."""
+    folder = Path(folder)
+    write_table(study.trials, folder / "ch5_simulated_phase3.csv", "trials")
+    write_table(study.interventions, folder / "ch5_simulated_phase2_interventions.csv", "interventions")
+    analysed = study.trials.drop_duplicates(["participant", "trial"])[DESIGN_COLUMNS].reset_index(drop=True)
+    write_table(illustrative_questionnaire(analysed, seed=0), folder / "ch5_illustrative_questionnaire.csv", "trials")
+    with atomic_path(folder / "ch5_simulated_participants.csv") as tmp:
+        study.participants.to_csv(tmp, index=False, float_format="%.6g")
+    return folder

@@ -1,0 +1,320 @@
+"""SIMULATED Phase III of the chapter 5 user study (the teaming task, Fig. 5.3, Sec. 5.2.3).
+
+Robots shuttle between depots on the left and right edges of a workspace with disk obstacles. On
+every trip each robot detects each obstacle with probability 0.8; detected obstacles are avoided
+with the minimally invasive controller on the team's safe set (nominal steering to the goal unless
+the next state would leave ``{V_team >= alpha}``, then the optimal avoid control
+``u* = w sign(dV/dtheta)``, Sec. 4.2); undetected ones are driven into. The simulated supervisor
+removes (relocates) an obstacle when a robot near it reaches ``V_S + w <= mu`` (a fresh ``w`` per
+approach). Counted per trial: trips, interventions, collisions, false positives (interventions
+where every robot near the obstacle had detected it, so would have avoided it) and the arcade score
+(trip +1, collision -1, removal -1/2; Sec. 5.2.3). Everything is vectorized over trials, robots
+and obstacles; a study's trials run as one batch.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..supervision.dubins import TRUE_W_MAX, dubins_step
+from ..supervision.reachability import ValueFunction
+from ..supervision.supervisor import NoisySupervisor
+
+OBSTACLE_RADIUS = 1.0
+
+
+@dataclass(frozen=True)
+class Team:
+    """A robot team's safe set ``{V >= alpha}`` used by the minimally invasive controller."""
+    value: ValueFunction
+    alpha: float = 0.0
+
+    def __post_init__(self):
+        if not isinstance(self.value, ValueFunction):
+            raise ValueError("value must be a mutual.supervision.reachability.ValueFunction")
+        if not np.isfinite(self.alpha):
+            raise ValueError(f"alpha must be finite, got {self.alpha!r}")
+
+
+@dataclass(frozen=True)
+class TeamingConfig:
+    """Phase III task. The thesis gives only the detection probability and the score rule; the
+    rest are our choices (workspace in units of the Dubins speed 3/s, obstacle radius 1).
+    ``filter_margin``: the controller engages when the next state would fall below
+    ``alpha + filter_margin`` (0 as in the thesis; a margin of about the grid value function's
+    error keeps robots inside ``{V >= alpha}`` exactly in discrete time)."""
+    width: float = 40.0
+    height: float = 24.0
+    obstacle_radius: float = OBSTACLE_RADIUS
+    n_robots: int = 5
+    n_obstacles: int = 8
+    duration: float = 60.0
+    dt: float = 0.05
+    detection_prob: float = 0.8
+    near_distance: float = 6.0
+    goal_tolerance: float = 1.0
+    heading_gain: float = 2.0
+    depot_clearance: float = 8.0
+    obstacle_gap: float = 6.0
+    filter_margin: float = 0.0
+    trip_reward: float = 1.0
+    collision_cost: float = 1.0
+    removal_cost: float = 0.5
+
+    def __post_init__(self):
+        for name in ("width", "height", "obstacle_radius", "duration", "dt", "near_distance", "goal_tolerance",
+                     "heading_gain"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive number, got {v!r}")
+        for name in ("n_robots", "n_obstacles"):
+            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
+                raise ValueError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
+        if not 0 <= self.detection_prob <= 1:
+            raise ValueError(f"detection_prob must lie in [0, 1], got {self.detection_prob!r}")
+        if self.width <= 2 * self.depot_clearance:
+            raise ValueError("width must exceed twice depot_clearance")
+
+
+@dataclass
+class TeamingRecord:
+    """Snapshots of one trial (for Fig. 5.3): robot states, obstacle centres, detections, times."""
+    times: list = field(default_factory=list)
+    robots: list = field(default_factory=list)
+    obstacles: list = field(default_factory=list)
+    detected: list = field(default_factory=list)
+    removals: list = field(default_factory=list)
+
+
+def task_layout(version, config):
+    """Obstacle centres and robot start states of task ``version`` (a seeded random layout).
+
+    Obstacles are placed uniformly in the middle of the workspace (``depot_clearance`` from
+    each depot), at least ``obstacle_gap`` apart; robots start on alternating depots.
+    """
+    rng = np.random.default_rng([20_19, int(version)])
+    obstacles = _free_positions(rng, config, config.n_obstacles)
+    side = np.arange(config.n_robots) % 2
+    x = np.where(side == 0, 0.0, config.width)
+    y = rng.uniform(2.0, config.height - 2.0, config.n_robots)
+    robots = np.stack([x, y, np.where(side == 0, 0.0, np.pi)], axis=1)
+    return obstacles, robots
+
+
+def _free_positions(rng, config, n):
+    """``n`` obstacle centres in the middle of the workspace, ``obstacle_gap`` apart (rejection sampling)."""
+    out = np.empty((0, 2))
+    for _ in range(100):
+        c = _candidates(rng, config, 1)[0]
+        if len(out) == 0 or np.min(np.linalg.norm(out - c, axis=1)) >= config.obstacle_gap:
+            out = np.vstack([out, c])
+            if len(out) == n:
+                return out
+    raise ValueError("could not place the obstacles: lower n_obstacles or obstacle_gap, or enlarge the workspace")
+
+
+def _candidates(rng, config, n):
+    r = config.obstacle_radius
+    return rng.uniform([config.depot_clearance, 2 * r], [config.width - config.depot_clearance, config.height - 2 * r],
+                       size=(n, 2))
+
+
+def _relocate(rng, config, others, robots):
+    """A new centre for a removed obstacle: of 64 random candidates ``obstacle_gap`` clear of the
+    other obstacles (or the clearest, if none is), the one farthest from every robot."""
+    cand = _candidates(rng, config, 64)
+    gap = np.min(np.linalg.norm(cand[:, None] - others[None], axis=2), axis=1)
+    clear = gap >= config.obstacle_gap
+    pool = cand[clear] if clear.any() else cand[[np.argmax(gap)]]
+    far = np.min(np.linalg.norm(pool[:, None] - robots[None], axis=2), axis=1)
+    return pool[np.argmax(far)]
+
+
+def _group_interp(functions, which, states, fill_value):
+    """Evaluate ``functions[which[b]]`` on ``states[b]`` (shape (B, ..., 3)) for every trial b."""
+    out = np.empty(states.shape[:-1])
+    for g, fn in enumerate(functions):
+        sel = which == g
+        if sel.any():
+            out[sel] = fn.interp(states[sel].reshape(-1, 3), fill_value=fill_value).reshape(out[sel].shape)
+    return out
+
+
+def _unique(objects):
+    """Distinct objects (by identity) and each item's index among them."""
+    uniq, index = [], []
+    for o in objects:
+        for i, u in enumerate(uniq):
+            if u is o:
+                index.append(i)
+                break
+        else:
+            uniq.append(o)
+            index.append(len(uniq) - 1)
+    return uniq, np.array(index)
+
+
+@dataclass
+class _Batch:
+    """The mutable state of a batch of Phase III trials (B trials, R robots, O obstacles)."""
+    robots: np.ndarray          # (B, R, 3) world states
+    obs: np.ndarray             # (B, O, 2) obstacle centres
+    goal_x: np.ndarray          # (B, R) depot the robot is heading for
+    goal_y: np.ndarray          # (B, R)
+    origin_x: np.ndarray        # (B, R) depot it left
+    detected: np.ndarray        # (B, R, O) this trip's detections
+    threshold: np.ndarray       # (B, R, O) supervisor's judgement level for the current approach
+    was_near: np.ndarray        # (B, R, O)
+    latched: np.ndarray         # (B, R) obstacle being avoided, or -1
+    turn: np.ndarray            # (B, R) the avoid control while latched
+    counts: dict
+
+
+def _start_batch(versions, config, rng):
+    layouts = [task_layout(v, config) for v in versions]
+    robots = np.stack([l[1] for l in layouts]).astype(float)
+    n, R, O = len(versions), config.n_robots, config.n_obstacles
+    goal_x = np.where(robots[..., 0] == 0.0, config.width, 0.0)
+    return _Batch(robots=robots, obs=np.stack([l[0] for l in layouts]), goal_x=goal_x,
+                  goal_y=rng.uniform(2.0, config.height - 2.0, (n, R)), origin_x=config.width - goal_x,
+                  detected=rng.random((n, R, O)) < config.detection_prob, threshold=np.full((n, R, O), -np.inf),
+                  was_near=np.zeros((n, R, O), bool), latched=np.full((n, R), -1), turn=np.zeros((n, R)),
+                  counts={k: np.zeros(n, int) for k in ("trips", "interventions", "collisions", "false_positives",
+                                                        "encounters", "detected_encounters")})
+
+
+def _drive(b, teams, config):
+    """Nominal steering to the goal, overridden by the minimally invasive avoid control (Sec. 4.2, 4.5).
+
+    Detected obstacles only: a robot engages when its nominal next state would leave
+    ``{V_team >= alpha + margin}``, then turns at the optimal control's sign until it stops
+    approaching that obstacle (it has cleared it); turn rates are clipped to the true ``w_max``.
+    """
+    fns, which, alpha = teams
+    n, R, _ = b.robots.shape
+    bearing = np.arctan2(b.goal_y - b.robots[..., 1], b.goal_x - b.robots[..., 0])
+    u = np.clip(config.heading_gain * np.angle(np.exp(1j * (bearing - b.robots[..., 2]))), -TRUE_W_MAX, TRUE_W_MAX)
+    nxt = dubins_step(b.robots.reshape(-1, 3), u.ravel(), config.dt).reshape(n, R, 3)
+    v_next = _group_interp(fns, which, _relative(nxt, b.obs), np.inf) - alpha - config.filter_margin
+    v_next = np.where(b.detected, v_next, np.inf)
+    worst = np.argmin(v_next, axis=2)
+    engage = (np.take_along_axis(v_next, worst[..., None], 2)[..., 0] < 0) & (b.latched != worst)
+    if engage.any():
+        bi, ri = np.nonzero(engage)
+        rel_now = _relative(b.robots, b.obs)[bi, ri, worst[bi, ri]]
+        for g, fn in enumerate(fns):
+            sel = which[bi] == g
+            if sel.any():
+                b.turn[bi[sel], ri[sel]] = np.clip(fn.safe_control(rel_now[sel]), -TRUE_W_MAX, TRUE_W_MAX)
+        b.latched[bi, ri] = worst[bi, ri]
+    if (b.latched >= 0).any():
+        nxt = dubins_step(b.robots.reshape(-1, 3), np.where(b.latched >= 0, b.turn, u).ravel(),
+                          config.dt).reshape(n, R, 3)
+    b.robots = nxt
+    held = np.take_along_axis(_relative(b.robots, b.obs), np.maximum(b.latched, 0)[..., None, None], 2)[:, :, 0]
+    approaching = held[..., 0] * np.cos(held[..., 2]) + held[..., 1] * np.sin(held[..., 2]) < 0
+    b.latched = np.where(approaching, b.latched, -1)
+
+
+def _supervise(b, sups, config, rng):
+    """The noisy idealized supervisor (Sec. 4.3): a fresh judgement level ``mu - w`` whenever a robot
+    comes within ``near_distance`` of an obstacle; remove (relocate) the obstacle when a near robot
+    reaches ``V_S <= level``. Returns the (trial, obstacle) pairs removed."""
+    fns, which, mu, sigma = sups
+    rel = _relative(b.robots, b.obs)
+    near = np.hypot(rel[..., 0], rel[..., 1]) <= config.near_distance
+    fresh = near & ~b.was_near
+    if fresh.any():
+        b.threshold = np.where(fresh, mu - sigma * rng.standard_normal(fresh.shape), b.threshold)
+        b.counts["encounters"] += fresh.sum(axis=(1, 2))
+        b.counts["detected_encounters"] += (fresh & b.detected).sum(axis=(1, 2))
+    b.was_near = near
+    trigger = near & (_group_interp(fns, which, rel, np.inf) <= b.threshold)
+    removed = list(zip(*np.nonzero(trigger.any(axis=1))))
+    for t, o in removed:
+        involved = near[t, :, o] | trigger[t, :, o]
+        b.counts["interventions"][t] += 1
+        b.counts["false_positives"][t] += bool(np.all(b.detected[t, involved, o]))
+        b.obs[t, o] = _relocate(rng, config, np.delete(b.obs[t], o, axis=0), b.robots[t, :, :2])
+        b.detected[t, :, o] = rng.random(b.detected.shape[1]) < config.detection_prob
+        b.was_near[t, :, o] = False
+        b.latched[t, b.latched[t] == o] = -1
+    return removed
+
+
+def _end_trips(b, config, rng):
+    """Collisions restart a trip from its depot, arrivals complete it; both draw a new goal and detections."""
+    rel = _relative(b.robots, b.obs)
+    crashed = np.any(np.hypot(rel[..., 0], rel[..., 1]) < config.obstacle_radius, axis=2)
+    arrived = (np.abs(b.robots[..., 0] - b.goal_x) < config.goal_tolerance) & ~crashed
+    b.counts["collisions"] += crashed.sum(axis=1)
+    b.counts["trips"] += arrived.sum(axis=1)
+    if crashed.any():
+        b.robots[crashed] = np.stack([b.origin_x[crashed], rng.uniform(2.0, config.height - 2.0, crashed.sum()),
+                                      np.where(b.goal_x[crashed] > b.origin_x[crashed], 0.0, np.pi)], axis=1)
+    b.goal_x, b.origin_x = np.where(arrived, b.origin_x, b.goal_x), np.where(arrived, b.goal_x, b.origin_x)
+    renew = crashed | arrived
+    if renew.any():
+        b.goal_y = np.where(renew, rng.uniform(2.0, config.height - 2.0, renew.shape), b.goal_y)
+        b.detected = np.where(renew[..., None], rng.random(b.detected.shape) < config.detection_prob, b.detected)
+        b.was_near &= ~renew[..., None]
+        b.latched = np.where(renew, -1, b.latched)
+
+
+def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=0, record=None):
+    """Run a batch of Phase III trials (one per ``teams[i]``, ``supervisors[i]``, ``versions[i]``).
+
+    Returns a DataFrame with one row per trial and columns trips, interventions, collisions,
+    false_positives, score, and encounters / detected_encounters (robot-obstacle approaches
+    within ``near_distance``, and those with the obstacle detected); with ``record=i`` also a
+    :class:`TeamingRecord` of trial ``i``.
+    """
+    n = len(teams)
+    if n == 0 or len(supervisors) != n or len(versions) != n:
+        raise ValueError(f"teams, supervisors and versions must be non-empty and equally long, "
+                         f"got {len(teams)}, {len(supervisors)}, {len(versions)}")
+    if record is not None and not 0 <= record < n:
+        raise ValueError(f"record must index a trial (0..{n - 1}), got {record!r}")
+    rng = np.random.default_rng(seed)
+    b = _start_batch(versions, config, rng)
+    team_fns, team_of = _unique([t.value for t in teams])
+    sup_fns, sup_of = _unique([s.value_fn for s in supervisors])
+    col = lambda values: np.array(values, dtype=float)[:, None, None]
+    team_args = (team_fns, team_of, col([t.alpha for t in teams]))
+    sup_args = (sup_fns, sup_of, col([s.mu for s in supervisors]), col([s.sigma for s in supervisors]))
+    rec = TeamingRecord() if record is not None else None
+    every = max(1, int(round(0.25 / config.dt)))
+    for step in range(int(round(config.duration / config.dt))):
+        _drive(b, team_args, config)
+        removed = _supervise(b, sup_args, config, rng)
+        _end_trips(b, config, rng)
+        if rec is not None:
+            rec.removals += [(step * config.dt, o) for t, o in removed if t == record]
+            if step % every == 0:
+                rec.times.append(step * config.dt)
+                rec.robots.append(b.robots[record].copy())
+                rec.obstacles.append(b.obs[record].copy())
+                rec.detected.append(b.detected[record].copy())
+    out = pd.DataFrame(b.counts)
+    out["score"] = (config.trip_reward * out["trips"] - config.collision_cost * out["collisions"]
+                    - config.removal_cost * out["interventions"])
+    return (out, rec) if record is not None else out
+
+
+def _relative(robots, obstacles):
+    """Robot states relative to every obstacle centre: (B, R, 3), (B, O, 2) -> (B, R, O, 3)."""
+    p = robots[:, :, None, :2] - obstacles[:, None, :, :]
+    theta = np.broadcast_to(robots[:, :, None, 2:3], p.shape[:-1] + (1,))
+    return np.concatenate([p, theta], axis=-1)
+
+
+def perfect_fit_trials(supervisors, versions, config=TeamingConfig(), seed=0):
+    """The Property of Sec. 4.5: each supervisor, made noiseless, watches a team avoiding on that
+    supervisor's own safe set ``{V_S >= mu}`` (a perfect fit), once per task version; returns the
+    per-trial counts of :func:`simulate_teaming` (false positives should be zero, up to the grid's
+    value error, which ``config.filter_margin`` absorbs)."""
+    pairs = [(s, v) for s in supervisors for v in versions]
+    teams = [Team(s.value_fn, s.mu) for s, _ in pairs]
+    noiseless = [NoisySupervisor(s.value_fn, s.mu, 0.0) for s, _ in pairs]
+    return simulate_teaming(teams, noiseless, [v for _, v in pairs], config, seed)
