@@ -14,7 +14,7 @@ import pytest
 import mutual.compendium.paths as paths
 from mutual.atomic import atomic_path
 from mutual.compendium.claims import verdict
-from mutual.compendium.figures import save_table, savefig
+from mutual.compendium.figures import save_animation, save_table, savefig
 from mutual.compendium.notebooks import NotebookError, declared_parameters, execute
 from mutual.compendium.report import build_report
 from mutual.compendium.results import write_results
@@ -45,6 +45,10 @@ FIGURE_SCRIPT = textwrap.dedent("""
     ax.contourf(np.random.default_rng(0).random((5, 5)))
     ax.legend()
     savefig(fig, "fig_9_1")
+    from matplotlib.animation import FuncAnimation
+    from mutual.compendium.figures import save_animation
+    line, = ax.plot([], [])
+    save_animation(FuncAnimation(fig, lambda k: line.set_data(np.arange(k), np.arange(k)), frames=8), "anim_9_1")
 """)
 
 
@@ -60,7 +64,7 @@ def test_figures_are_byte_identical_across_runs(tmp_path):
         env.pop("SOURCE_DATE_EPOCH", None)
         subprocess.run([sys.executable, "-c", FIGURE_SCRIPT], env=env, check=True)
         digests.append(_digests(out))
-    assert set(digests[0]) == {"fig_9_1.pdf", "fig_9_1.png"}
+    assert set(digests[0]) == {"fig_9_1.pdf", "fig_9_1.png", "anim_9_1.gif"}
     assert digests[0] == digests[1]
 
 
@@ -71,6 +75,8 @@ def test_figure_and_table_names_are_checked(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="table"):
         save_table(pd.DataFrame({"a": [1]}), "fig_5_1")
     save_table(pd.DataFrame({"set": ["Standard"], "fp": [1.25]}), "table_9_1")
+    with pytest.raises(ValueError, match="anim"):
+        save_animation(None, "fig_9_1")
     assert (tmp_path / "table_9_1.md").read_text().splitlines()[0] == "| set | fp |"
 
 
@@ -183,3 +189,15 @@ def test_rules_must_fit_their_basis():
         verdict(row | {"compare": "abs:0.1"}, 3.0)
     with pytest.raises(ValueError, match="basis 'echo'"):
         verdict(row | {"basis": "echo"}, 3.0)
+
+
+def test_extensions_are_reported_apart_from_the_verdicts(claims_file):
+    from mutual.compendium.results import write_extensions
+    write_results("09_demo", {"c9-abs": 0.3})
+    write_extensions("09_demo", {"power-n80": {"statement": "N for 80% power", "value": 14,
+                                               "computed_by": "mutual.study.power.sample_size"}})
+    text = build_report().read_text()
+    summary, extensions = text.split("## Extensions beyond the thesis")
+    assert "1 reproduced" in summary and "N for 80% power | 14 | yes | mutual.study.power.sample_size" in extensions
+    with pytest.raises(ValueError, match="computed_by"):
+        write_extensions("09_demo", {"x": {"statement": "s", "value": 1}})

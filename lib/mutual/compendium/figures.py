@@ -12,7 +12,8 @@ from ..atomic import atomic_path, write_text
 from ..style import CYCLE, PALETTE, use_style  # noqa: F401 (the notebooks' one import)
 from .paths import figures_dir
 
-_NAME = re.compile(r"^(fig|table)_[0-9]+_[a-z0-9_]+$")
+_NAME = re.compile(r"^(fig|table|anim)_[0-9]+_[a-z0-9_]+$")
+MAX_ANIMATION_BYTES = 2 * 1024 * 1024
 
 
 def _check_name(name, kind):
@@ -37,6 +38,25 @@ def savefig(fig, name):
             fig.savefig(tmp, format=ext, metadata=metadata[ext])
         paths.append(target)
     return paths
+
+
+def save_animation(animation, name, fps=10, dpi=80):
+    """Save a matplotlib ``animation`` as ``<name>.gif`` (e.g. ``anim_6_2``) in the figures folder.
+
+    Frames are rendered by Agg and encoded by Pillow, so a rerun gives identical bytes; a GIF over
+    ``MAX_ANIMATION_BYTES`` (2 MiB) is refused: use fewer frames or a lower ``dpi``.
+    """
+    from matplotlib.animation import PillowWriter
+
+    _check_name(name, "anim")
+    target = figures_dir() / f"{name}.gif"
+    with atomic_path(target) as tmp:
+        animation.save(tmp, writer=PillowWriter(fps=fps), dpi=dpi)
+        size = tmp.stat().st_size
+        if size > MAX_ANIMATION_BYTES:
+            raise ValueError(f"{name}.gif would be {size / 2**20:.1f} MiB, over the 2 MiB limit: "
+                             "use fewer frames or a lower dpi")
+    return target
 
 
 def markdown_table(df, floatfmt=".3g"):

@@ -59,3 +59,26 @@ def write_results(notebook, claims, simulated=False):
                         "computed_by": str(entry.get("computed_by", ""))}
     text = json.dumps({"notebook": notebook, "claims": entries}, indent=1, sort_keys=True) + "\n"
     return write_text(results_dir() / f"{notebook}.json", text)
+
+
+def write_extensions(notebook, results):
+    """Write ``figures/results/extensions/<notebook>.json``: numbers of an extension beyond the
+    thesis (chapter 8's cycle, replication power), shown in the report's Extensions section and
+    never counted among the thesis's verdicts.
+
+    ``results`` maps a short key to a dict with ``statement`` (what was measured), ``value``,
+    ``computed_by`` (the library function), and optionally ``note`` and ``simulated`` (default True).
+    """
+    entries = {}
+    for key, entry in sorted(results.items()):
+        entry = dict(entry)
+        missing = {"statement", "value", "computed_by"} - set(entry)
+        unknown = set(entry) - {"statement", "value", "computed_by", "note", "simulated"}
+        if missing or unknown:
+            raise ValueError(f"extension result {key!r}: needs 'statement', 'value' and 'computed_by' and may carry "
+                             f"'note' and 'simulated' (missing {sorted(missing)}, unknown {sorted(unknown)})")
+        entries[key] = {"statement": str(entry["statement"]), "value": _plain(entry["value"]),
+                        "computed_by": str(entry["computed_by"]), "note": str(entry.get("note", "")),
+                        "simulated": bool(entry.get("simulated", True))}
+    text = json.dumps({"notebook": notebook, "extensions": entries}, indent=1, sort_keys=True) + "\n"
+    return write_text(results_dir() / "extensions" / f"{notebook}.json", text)
