@@ -22,6 +22,14 @@ def figures_dir() -> Path:
     return Path(os.environ.get("MUTUAL_OUTPUT_DIR", ROOT / "figures"))
 
 
+def generated_data_dir() -> Path:
+    """Folder for datasets a notebook generates (simulated demonstrations, the simulated study):
+    ``data/`` when the outputs go to ``figures/``, else ``<output folder>/data``."""
+    if "MUTUAL_OUTPUT_DIR" in os.environ:
+        return figures_dir() / "data"
+    return DATA
+
+
 def results_dir() -> Path:
     """Folder for the per-notebook result files read by the reproduction report."""
     return figures_dir() / "results"
