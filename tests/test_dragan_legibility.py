@@ -86,7 +86,7 @@ def test_trust_region_binds_the_result():
 @pytest.mark.parametrize("kwargs,match", [
     (dict(goal_index=2), "goal_index"),
     (dict(beta=0.5), "empty trust region"),
-    (dict(eta=0.0), "eta must be positive"),
+    (dict(eta=0.0), "eta must be a positive"),
     (dict(N=1), "N must be"),
 ])
 def test_bad_inputs(kwargs, match):

@@ -237,7 +237,7 @@ def test_bad_inputs_name_the_argument():
         QuadraticCost(Q=np.eye(2), q=np.zeros(2), R=np.ones(3), r=np.zeros(2), QN=np.eye(2), qN=np.zeros(2))
     with pytest.raises(ValueError, match="B must be"):
         LinearDynamics(np.eye(2), np.ones((3, 1)))
-    with pytest.raises(ValueError, match="alpha must be finite"):
+    with pytest.raises(ValueError, match="alpha must be a finite"):
         legible_cost(reaching_cost(G1), reaching_cost(G0), np.inf)
 
 
