@@ -63,6 +63,9 @@ def _dense_dragan_step_check(goals, N):
     return float(np.abs(xs - banded.xs).max())
 
 
+_COMPILED = set()
+
+
 def legible_vs_dragan(N, G, d, repeats):
     dt = 1.0 / N
     goals = _goal_layout(G, d)
@@ -79,7 +82,9 @@ def legible_vs_dragan(N, G, d, repeats):
         "ours": lambda: leg.legible_trajectory(dyn, truth, others, x0, N, 1.0, backend="jax"),
         "ds": lambda: ds.optimise_legibility(np.zeros(d), goals, 1, N=N, max_iter=iters, tol=0.0)}, repeats)
     gap = float(np.abs(fast.us - ref.us).max() / np.abs(ref.us).max())
-    return best, first - best["ours"], gap, iters, full
+    compile_s = max(first - best["ours"], 0.0) if (N, d) not in _COMPILED else 0.0   # shared by rows of one shape
+    _COMPILED.add((N, d))
+    return best, compile_s, gap, iters, full
 
 
 def run(quick=False):
@@ -107,7 +112,8 @@ def run(quick=False):
                     f"within {SCORE_TOL:g} of its score {full.scores[-1]:.4f}",
             "seconds": best["ours"], "baseline": "D&S functional gradient, solveh_banded metric, oracle stop",
             "baseline_seconds": best["ds"], "compile_seconds": compile_s,
-            "agree": f"ours vs NumPy Riccati: rel. max |du| {gap:.1e}; D&S banded vs explicit inverse checked below",
+            "agree": f"ours vs NumPy Riccati: rel. max |du| {gap:.1e}; D&S banded vs explicit inverse: row below"
+                     + ("" if compile_s else "; compiled in an earlier row (same shape)"),
             "target": f"ours >= {need:g}x D&S", "met": bool(best["ds"] >= need * best["ours"] and gap < 1e-9)})
     diff = _dense_dragan_step_check(_goal_layout(5, 2), 1000)
     dense_goals = _goal_layout(5, 2)

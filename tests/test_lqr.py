@@ -185,10 +185,11 @@ def test_bad_input_names_the_argument(kwargs, match):
         solve_lq(**args)
 
 
-@pytest.mark.parametrize("seed,convex_state", [(0, True), (2, False)])
-def test_compiled_backend_matches_numpy(seed, convex_state):
-    """The compiled recursion (JAX, padded horizon) gives the reference solution, gains and value function."""
-    p = random_problem(seed, convex_state=convex_state)
+@pytest.mark.parametrize("seed,convex_state,m", [(0, True, 2), (2, False, 2), (3, True, 5)])
+def test_compiled_backend_matches_numpy(seed, convex_state, m):
+    """The compiled recursion (JAX, padded horizon; unrolled Cholesky for m <= 4, LAPACK above) gives the
+    reference solution, gains and value function."""
+    p = random_problem(seed, convex_state=convex_state, m=m)
     ref, fast = solve(p), solve_lq(p["A"], p["B"], p["Q"], p["R"], p["x0"], p["N"], q=p["q"], r=p["r"], QN=p["QN"],
                                    qN=p["qN"], M=p["M"], c=p["c"], backend="jax")
     for name in ("xs", "us", "K", "k", "V", "v"):
@@ -203,6 +204,13 @@ def test_compiled_backend_time_invariant_long_horizon():
     ref, fast = solve_lq(*args, QN=np.eye(2)), solve_lq(*args, QN=np.eye(2), backend="jax")
     np.testing.assert_allclose(fast.us, ref.us, atol=1e-12)
     assert fast.cost == pytest.approx(ref.cost, rel=1e-12)
+
+
+@pytest.mark.parametrize("m", [2, 5])
+def test_compiled_backend_refuses_unbounded(m):
+    I = np.eye(m)
+    with pytest.raises(ValueError, match="unbounded LQ problem: the control Hessian R \\+ B'VB at stage 9"):
+        solve_lq(I, 0.1 * I, np.zeros((m, m)), 0.01 * I, np.zeros(m), 10, QN=-10 * I, qN=np.ones(m), backend="jax")
 
 
 def test_solution_repr_is_short():

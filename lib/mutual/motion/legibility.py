@@ -158,9 +158,12 @@ class QuadraticCost:
         return QuadraticCost._combined(fields, self.const + other.const)
 
     def __mul__(self, w):
-        if not isinstance(w, (int, float, np.integer, np.floating)) or isinstance(w, bool):
+        if isinstance(w, (str, bytes, bool, QuadraticCost)) or np.ndim(w) != 0:
             return NotImplemented
-        w = float(w)
+        try:
+            w = float(w)
+        except (TypeError, ValueError):
+            return NotImplemented
         if not np.isfinite(w):
             raise ValueError(f"a cost can only be scaled by a finite number, got {w!r}")
         return QuadraticCost._combined([w * getattr(self, f) for f in _FIELDS], w * self.const)
@@ -244,12 +247,21 @@ def distractor_mixture(J0, weights=None):
 
 def legible_cost(J1, J0, alpha, weights=None):
     """The legibility objective ``(1 + alpha) J1 - J0`` (eqs. (6.13), (6.15)); ``J0`` may be a list of
-    distractors, combined by :func:`distractor_mixture` (``weights``, default equal)."""
-    if not isinstance(alpha, (int, float, np.integer, np.floating)) or isinstance(alpha, bool) or not np.isfinite(alpha):
+    distractors, combined by :func:`distractor_mixture` (``weights``, default equal). ``J1`` and ``J0``
+    may be anything that adds and scales (QuadraticCosts, or chapter 7's feature-weight vectors)."""
+    if isinstance(alpha, (str, bytes, bool)) or np.ndim(alpha) != 0:
         raise ValueError(f"alpha must be a finite number, got {alpha!r}")
-    if not isinstance(J1, QuadraticCost):
-        raise ValueError(f"J1 must be a QuadraticCost, got {type(J1).__name__}")
-    return (1.0 + alpha) * J1 - distractor_mixture(J0, weights)
+    try:
+        finite = bool(np.isfinite(alpha))
+    except Exception:           # a traced (JAX) value: checked where it is concrete
+        finite = True
+    if not finite:
+        raise ValueError(f"alpha must be a finite number, got {alpha!r}")
+    if isinstance(J0, (list, tuple)):
+        J0 = distractor_mixture(J0, weights)
+    elif weights is not None:
+        raise ValueError("weights are only for a list of distractors J0")
+    return (1.0 + alpha) * J1 - J0
 
 
 def solve(dynamics, cost, x0, N, backend="numpy"):
