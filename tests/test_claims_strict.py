@@ -19,7 +19,7 @@ import pytest
 from conftest import AWAITING_PROVENANCE
 
 from mutual.compendium.audit import NotebookCode, Unresolved
-from mutual.compendium.claims import VERDICTS, load_claims, rule_problems
+from mutual.compendium.claims import VERDICTS, load_claims, rule_problems, verdict
 from mutual.compendium.paths import FIGURES, NOTEBOOKS, ROOT
 from mutual.compendium.report import README_BEGIN, README_END, summary_counts
 from mutual.compendium.results import resolve_computed_by
@@ -46,13 +46,26 @@ def test_every_rule_can_fail(claim):
 
 
 @pytest.mark.parametrize("stem", CHAPTERS)
+def test_every_value_fits_its_claims_basis_and_rule(stem, executed_notebook):
+    """A range for an undetermined claim, a boolean for rule 'true', a number for a numeric rule."""
+    claims = CLAIMS.set_index("id")
+    problems = []
+    for cid, entry in sorted(executed_notebook(stem).items()):
+        try:
+            verdict(claims.loc[cid].to_dict() | {"id": cid}, entry["value"])
+        except ValueError as err:
+            problems.append(str(err))
+    _report(stem, problems)
+
+
+@pytest.mark.parametrize("stem", CHAPTERS)
 def test_reported_values_are_computed_not_typed_in(stem):
     _awaiting(stem)
     code = NotebookCode(NOTEBOOKS / f"{stem}.ipynb")
-    _report(stem, [f"claim {r.claim} ({BASIS[r.claim]}, code cell {r.cell}): the value `{r.source[:70]}` is a "
-                   "literal typed into the notebook (a constant, a parameter, or arithmetic of those), not a "
-                   "computed quantity" for r in code.reported() if BASIS.get(r.claim) in CHECKED
-                   and code.is_literal(r.value)])
+    _report(stem, [f"{'claims ' if r.generated else 'claim '}{r.claim} ({BASIS.get(r.claim, 'generated ids')}, code "
+                   f"cell {r.cell}): the value `{r.source[:70]}` is a literal typed into the notebook (a constant, a "
+                   "parameter, or arithmetic of those), not a computed quantity" for r in code.reported()
+                   if (r.generated or BASIS.get(r.claim) in CHECKED) and code.is_literal(r.value)])
 
 
 @pytest.mark.parametrize("stem", CHAPTERS)
@@ -140,8 +153,12 @@ SYNTHETIC = [
         total = 0
         total += 1
         summed = 0
-        for k in range(3):
+        for k in st.rm_anova(3):
             summed += k
+        looped = 0
+        for j in range(3):
+            looped += j
+        pairs = [(name, st.rm_anova(name)) for name in ("a", "b")]
         data = mutual.study.data.read_table("x")
         claims = {
             "lit-true": {"value": True, "computed_by": "mutual.study.stats.rm_anova", "note": "n"},
@@ -153,6 +170,7 @@ SYNTHETIC = [
             "lit-container": {"value": bool(len(fixed) == 1)},
             "lit-settings": {"value": settings["goal"][0] == 2},
             "lit-augmented": {"value": total},
+            "lit-looped": {"value": looped},
             "computed-library": {"value": st.design_from_f_dofs(2, 20)},
             "computed-mutated": {"value": table[0] > 1},
             "computed-appended": {"value": counts[0]},
@@ -162,7 +180,9 @@ SYNTHETIC = [
         proposed = {"computed-filtered": {"value": table[1]}, "unused": {"value": 1}}
         extra = {}
         extra["computed-item"] = {"value": st.rm_anova(2)}
-        write_results("09_demo", {**claims, **{k: v for k, v in proposed.items() if k != "unused"}, **extra})"""),
+        write_results("09_demo", {**claims, **{k: v for k, v in proposed.items() if k != "unused"}, **extra,
+                                  **{f"computed-{name}": {"value": value} for name, value in pairs},
+                                  **{f"lit-{kind}": {"value": typed} for kind, typed in [("x", 1.0), ("y", 2.0)]}})"""),
 ]
 
 
@@ -180,7 +200,8 @@ def test_the_checker_tells_literals_from_computed_values(synthetic):
     reported = {r.claim: r for r in synthetic.reported()}
     assert synthetic.parameters == {"quick", "n_recruits", "w_max"}
     literal = {c for c, r in reported.items() if synthetic.is_literal(r.value)}
-    assert literal == {c for c in reported if c.startswith("lit-") or c == "unused"}
+    assert literal == {c for c in reported if c.startswith(("lit-", "f'lit-")) or c == "unused"}
+    assert {c for c, r in reported.items() if r.generated} == {"f'computed-{name}'", "f'lit-{kind}'"}
     assert {"computed-filtered", "computed-item", "computed-bare"} <= set(reported)
     assert reported["lit-true"].computed_by is not None and reported["lit-arith"].computed_by is None
     assert synthetic.scalar_constants() == {"n_recruits": 12, "w_max": 0.75, "const": 3}

@@ -245,3 +245,13 @@ def test_extensions_are_reported_apart_from_the_verdicts(claims_file):
     assert "1 reproduced" in summary and "N for 80% power | 14 | yes | mutual.study.stats.rm_anova" in extensions
     with pytest.raises(ValueError, match="computed_by"):
         write_extensions("09_demo", {"x": {"statement": "s", "value": 1}})
+
+
+def test_batch_runs_print_no_progress_bars(tmp_path):
+    """TQDM_DISABLE=1 plus the runner's kernel start-up line: even a bar asked for explicitly stays silent."""
+    path = _notebook(tmp_path, "quick = False", "import os\nfrom tqdm import tqdm\nfrom tqdm.auto import tqdm as auto\n"
+                     "total = sum(tqdm(range(5), disable=False, desc='loud')) + sum(auto(range(5)))\n"
+                     "print(total, os.environ['TQDM_DISABLE'])")
+    nb = execute(path, {"quick": True})
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+    assert [o.get("text") for o in outputs] == ["20 1\n"], outputs

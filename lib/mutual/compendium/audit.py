@@ -19,7 +19,7 @@ import nbformat
 
 # calls that only convert or combine what they are given: literal in, literal out
 _PURE_BUILTINS = {"bool", "int", "float", "str", "round", "abs", "min", "max", "sum", "len", "tuple", "list",
-                  "dict", "set", "sorted", "complex"}
+                  "dict", "set", "sorted", "complex", "range", "zip", "enumerate", "reversed"}
 _PURE_MODULES = ("numpy", "math")
 _MAGIC = re.compile(r"^(\s*)[%!]")
 
@@ -30,13 +30,15 @@ class Unresolved(ValueError):
 
 @dataclass
 class Reported:
-    """One claim as a notebook's code reports it."""
+    """One claim as a notebook's code reports it; ``generated`` when its id is computed (an f-string key
+    of a comprehension), in which case ``claim`` is the key's source."""
 
     claim: str
     value: ast.AST
     computed_by: ast.AST | None
     note: ast.AST | None
     cell: int  # number of the code cell with the write_results call (1-based)
+    generated: bool = False
 
     @property
     def source(self):
@@ -45,6 +47,15 @@ class Reported:
 
 def _without_magics(source):
     return "\n".join(_MAGIC.sub(r"\1pass  # ", line) for line in source.splitlines())
+
+
+def _element(container, index):
+    """A node standing for one element of ``container`` (None stays None)."""
+    return None if container is None else ast.Subscript(value=container, slice=ast.Constant(index), ctx=ast.Load())
+
+
+def _key(node):
+    return node.value if isinstance(node, ast.Constant) and isinstance(node.value, str) else None
 
 
 def _import(dotted):
@@ -93,7 +104,7 @@ class NotebookCode:
         elif isinstance(target, (ast.Tuple, ast.List)):
             same = isinstance(value, (ast.Tuple, ast.List)) and len(value.elts) == len(target.elts)
             for i, elt in enumerate(target.elts):
-                self._bind(elt, value.elts[i] if same else None)
+                self._bind(elt, value.elts[i] if same else _element(value, i))
         elif isinstance(target, ast.Starred):
             self._bind(target.value, None)
         elif isinstance(target, ast.Subscript) and isinstance(target.value, ast.Name):
@@ -112,7 +123,7 @@ class NotebookCode:
             self._bind(node.target, ast.BinOp(left=ast.Name(id=getattr(node.target, "id", "_"), ctx=ast.Load()),
                                               op=node.op, right=node.value))
         elif isinstance(node, (ast.For, ast.AsyncFor, ast.comprehension)):
-            self._bind(node.target, None)
+            self._bind(node.target, _element(node.iter, 0))  # literal only if what it runs over is
         elif isinstance(node, ast.withitem) and node.optional_vars is not None:
             self._bind(node.optional_vars, None)
         elif isinstance(node, (ast.Import, ast.ImportFrom)):
@@ -202,7 +213,9 @@ class NotebookCode:
                                      "name and the claims")
                 for claim, entry in self._entries(args[1], number, set()):
                     value, computed_by, note = self._fields(entry)
-                    found.append(Reported(claim, value, computed_by, note, number))
+                    generated = not isinstance(claim, str)
+                    found.append(Reported(ast.unparse(claim) if generated else claim, value, computed_by, note,
+                                          number, generated))
         return found
 
     def _entries(self, node, cell, seen):
@@ -212,10 +225,8 @@ class NotebookCode:
             for key, value in zip(node.keys, node.values):
                 if key is None:
                     out += self._entries(value, cell, seen)
-                elif isinstance(key, ast.Constant) and isinstance(key.value, str):
-                    out.append((key.value, value))
                 else:
-                    raise Unresolved(f"{where}: claim id {ast.unparse(key)} is not a string literal")
+                    out.append((_key(key) or key, value))
             return out
         if isinstance(node, ast.Name) and node.id not in seen:
             seen = seen | {node.id}
@@ -224,15 +235,14 @@ class NotebookCode:
                 raise Unresolved(f"{where}: cannot read the claims bound to {node.id!r}; write them as a dict literal")
             out = [e for b in binds for e in self._entries(b, cell, seen)]
             out += [e for u in self.updates.get(node.id, []) for e in self._entries(u, cell, seen)]
-            for key, value in self.items.get(node.id, []):
-                if not (isinstance(key, ast.Constant) and isinstance(key.value, str)):
-                    raise Unresolved(f"{where}: claim id {ast.unparse(key)} is not a string literal")
-                out.append((key.value, value))
+            out += [(_key(key) or key, value) for key, value in self.items.get(node.id, [])]
             return out
-        if isinstance(node, ast.DictComp) and len(node.generators) == 1:
+        if isinstance(node, ast.DictComp):
             it = node.generators[0].iter
-            if isinstance(it, ast.Call) and isinstance(it.func, ast.Attribute) and it.func.attr == "items":
-                return self._entries(it.func.value, cell, seen)
+            if (len(node.generators) == 1 and isinstance(it, ast.Call) and isinstance(it.func, ast.Attribute)
+                    and it.func.attr == "items"):
+                return self._entries(it.func.value, cell, seen)  # a filtered copy of another dict
+            return [(node.key, node.value)]  # claims generated by the comprehension
         if isinstance(node, ast.BinOp) and isinstance(node.op, ast.BitOr):
             return self._entries(node.left, cell, seen) + self._entries(node.right, cell, seen)
         if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "dict":

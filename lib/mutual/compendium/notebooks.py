@@ -38,6 +38,7 @@ KERNEL = "mutual"
 CELL_TIMEOUT = 1800      # seconds per cell
 INTERRUPT_GRACE = 10     # seconds an interrupted kernel gets to unwind its cell before it is killed
 KERNEL_ENV = {"TQDM_DISABLE": "1", "PYDEVD_DISABLE_FILE_VALIDATION": "1"}
+KERNEL_START = ["--IPKernelApp.exec_lines=import mutual.compendium.runs as _runs; _runs.quiet_progress_bars(); del _runs"]
 _TEMPORARY = re.compile(r"^\..+\.[a-z0-9_]{8}(\.[A-Za-z0-9]+)?$")  # mutual.atomic's temporary files
 
 
@@ -134,6 +135,7 @@ class _Run:
 
         self.km = AsyncKernelManager(kernel_name=KERNEL)
         self.client = NotebookClient(self.nb, km=self.km, kernel_name=KERNEL, timeout=self.timeout,
+                                     extra_arguments=list(KERNEL_START),
                                      resources={"metadata": {"path": str(self.path.parent)}})
         await self.client.async_start_new_kernel(env=self.env, stdout=self.log, stderr=self.log)
         await self.client.async_start_new_kernel_client()

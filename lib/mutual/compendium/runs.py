@@ -95,3 +95,21 @@ def check_record(doc: dict, label: str, committed: bool) -> dict:
         raise StaleResults(f"{label}: written by a {run['mode']} run of {run['notebook']}; the committed report "
                            "takes full runs only (`make figures`)")
     return run
+
+
+def quiet_progress_bars():
+    """Switch tqdm progress bars off in this process, even where a library asks for one explicitly
+    (``TQDM_DISABLE=1`` only changes tqdm's default). The runner calls this at the start of every
+    kernel it starts, so batch runs print no progress bars into the executed notebooks."""
+    import tqdm.std
+
+    if getattr(tqdm.std.tqdm.__init__, "quiet", False):
+        return
+    loud = tqdm.std.tqdm.__init__
+
+    def quiet(self, *args, **kwargs):
+        kwargs["disable"] = True
+        loud(self, *args, **kwargs)
+
+    quiet.quiet = True
+    tqdm.std.tqdm.__init__ = quiet
