@@ -4,7 +4,7 @@ message names the argument and the reason, never a NaN or a silently different a
 import numpy as np
 import pytest
 
-from mutual.motion import anticipation, dragan, explore_legibility, legibility as leg, observer, qp
+from mutual.motion import anticipation, dragan, explore_legibility, legibility as leg, observer, path_measures, qp
 from mutual.motion.lqr import solve_lq
 
 DT, N = 0.1, 10
@@ -61,7 +61,7 @@ CASES = [
     (leg.receding_horizon, (DYN, J1, J0, [np.nan, 0.0], N, lambda s: 1.0), {}, ValueError,
      "x0 must be a finite vector"),
     (leg.receding_horizon, (DYN, J1, J0, X0, N, 1.0), {}, ValueError, "alpha_of_s must be a function"),
-    (leg.time_to_reach, (NAN_XS, 0.5, DT), {}, ValueError, "xs must be a finite"),
+    (path_measures.time_to_reach, (NAN_XS, 0.5, DT), {}, ValueError, "xs must be a finite"),
     # the Boltzmann observer
     (observer.log_likelihood_ratio, (DYN, J0, J1, X0, NAN_US), {}, ValueError, "us contains non-finite"),
     (observer.log_likelihood_ratio, (DYN, J0, J1, X0, INF_US), {}, ValueError, "us contains non-finite"),

@@ -19,7 +19,8 @@ import numpy as np
 import pandas as pd
 
 from .legibility import (geometric_alpha_schedule, linear_alpha_schedule, reaching_cost, receding_horizon,
-                         replan_gains, single_integrator, solve, time_to_reach)
+                         replan_gains, single_integrator, solve)
+from .path_measures import time_to_reach
 from .observer import lifted_cost, lifted_dynamics, weighted_prefix_log_likelihood
 
 
