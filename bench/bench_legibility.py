@@ -24,6 +24,7 @@ import time
 import numpy as np
 
 from mutual.motion import dragan as ds
+from mutual.motion import explore_legibility
 from mutual.motion import legibility as leg
 from mutual.motion import timing
 from mutual.motion.qp import multi_distractor_qp
@@ -146,6 +147,18 @@ def run(quick=False):
                  "seconds": rh / 100, "baseline": "", "baseline_seconds": None, "compile_seconds": 0.0,
                  "agree": "equals replanning one by one (tests)", "target": "< 1 ms per replan",
                  "met": bool(rh / 100 < 1e-3)})
+
+    # the Explore view (notebook 05): one redraw, including building the figure
+    for label, kw in [("2 goals, alpha = 1", {}), ("2 goals, anticipative", {"anticipative": True}),
+                      ("5 goals (QP), spread 8, height 4", {"n_goals": 5, "spread": 8.0, "goal_height": 4.0}),
+                      ("5 goals, anticipative (10 QPs)", {"n_goals": 5, "spread": 8.0, "goal_height": 4.0,
+                                                          "anticipative": True})]:
+        explore_legibility.legibility_view(**kw)                  # warm (imports, first solver calls)
+        t = timing.interleaved_best_times({"view": lambda: explore_legibility.legibility_view(**kw)},
+                                          2 if quick else 3)["view"]
+        rows.append({"benchmark": "Explore: legibility_view", "case": label, "seconds": t, "baseline": "",
+                     "baseline_seconds": None, "compile_seconds": 0.0, "agree": "tests check the drawn data",
+                     "target": "about a second (<= 1.5 s)", "met": bool(t <= 1.5)})
 
     # multi_distractor_qp: sparse (banded KKT) vs dense (lifted)
     goals = np.array([[x, 4.0] for x in (-4.0, -2.0, 0.0, 2.0, 4.0)])

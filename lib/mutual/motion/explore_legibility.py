@@ -66,7 +66,7 @@ def legibility_paths(alpha=1.0, n_goals=2, true_goal=1, spread=2.0, goal_height=
             sol = legible_trajectory(dyn, truth, others, x0, N, alpha)
             xs, us = sol.xs, sol.us
         elif anticipative:
-            xs, us = receding_horizon_qp(dyn, truth, others, x0, N, lambda s: eta * (1 - s), every=5)
+            xs, us = receding_horizon_qp(dyn, truth, others, x0, N, lambda s: eta * (1 - s), every=10)
         else:
             xs, us, _ = multi_distractor_qp(dyn, truth, others, x0, N, eta)
     except ValueError as err:
@@ -82,7 +82,7 @@ def legibility_view(alpha=1.0, n_goals=2, true_goal=1, spread=2.0, goal_height=1
     over time (right). Two goals: ``alpha`` weighs the task against being legible (eq. (6.15)),
     ``anticipative`` replans at every step with alpha rising linearly from ``alpha / 4`` to ``4 alpha``
     (eq. (6.16)). More goals: each distractor's log likelihood ratio is bounded by
-    ``eta = -strictness * spacing^2`` (nats, section 6.5's QP), ``anticipative`` replans every 5 steps
+    ``eta = -strictness * spacing^2`` (nats, section 6.5's QP), ``anticipative`` replans every 10 steps
     with the bound loosening to 0 at T."""
     d = legibility_paths(alpha, n_goals, true_goal, spread, goal_height, anticipative, strictness)
     fig = Figure(figsize=(8.4, 3.8), dpi=STYLE["figure.dpi"], layout="constrained")
