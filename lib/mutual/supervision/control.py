@@ -7,17 +7,37 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dubins import SPEED, TRUE_W_MAX, _check_positive, check_states, dubins_step
-from .reachability import ValueFunction
-from .supervisor import approach_scenes
+from .dubins import SPEED, TRUE_W_MAX, _check_positive, _real, check_states, dubins_step
+from .supervisor import NoisySupervisor, _check_count, _check_rng, approach_scenes
+from .value_function import ValueFunction
+
+
+def _check_value_fn(value_fn, name="value_fn"):
+    if not isinstance(value_fn, ValueFunction):
+        raise ValueError(f"{name} must be a mutual.supervision.ValueFunction, got {type(value_fn).__name__}")
+    return value_fn
+
+
+def _check_lookahead(lookahead):
+    x = _real(lookahead)
+    if x is None or not np.isfinite(x) or x < 0:
+        raise ValueError(f"lookahead must be a non-negative finite number of seconds, got {lookahead!r}")
+    return x
 
 
 def _obstacle_frame(value_fn, states, obstacles):
     """Per robot: the state relative to its most dangerous obstacle, and V there."""
+    _check_value_fn(value_fn)
     s = check_states(states)
     if obstacles is None:
         return s, value_fn.interp(s, fill_value=np.inf)
-    centres = np.asarray(obstacles, dtype=float).reshape(-1, 2)
+    try:
+        centres = np.asarray(obstacles, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"obstacles must be a (k, 2) array of centres, got {obstacles!r}") from None
+    if centres.size and (centres.ndim > 2 or centres.shape[-1] != 2):
+        raise ValueError(f"obstacles must be a (k, 2) array of centres, got shape {centres.shape}")
+    centres = centres.reshape(-1, 2)
     if len(centres) == 0:
         return s, np.full(len(s), np.inf)
     if not np.all(np.isfinite(centres)):
@@ -31,7 +51,10 @@ def _obstacle_frame(value_fn, states, obstacles):
 
 
 def _check_alpha(alpha, n):
-    a = np.broadcast_to(np.asarray(alpha, dtype=float), (n,))
+    try:
+        a = np.broadcast_to(np.asarray(alpha, dtype=float), (n,))
+    except (TypeError, ValueError):
+        raise ValueError(f"alpha must be one finite number or one per robot ({n}), got {alpha!r}") from None
     if not np.all(np.isfinite(a)):
         raise ValueError(f"alpha must be finite, got {alpha!r}")
     return a
@@ -56,11 +79,16 @@ def filter_control(value_fn, states, nominal_u, alpha, u_max=None, obstacles=Non
     """
     rel, v = _obstacle_frame(value_fn, states, obstacles)
     a = _check_alpha(alpha, len(rel))
-    nominal = np.broadcast_to(np.asarray(nominal_u, dtype=float), (len(rel),))
+    try:
+        nominal = np.broadcast_to(np.asarray(nominal_u, dtype=float), (len(rel),))
+    except (TypeError, ValueError):
+        raise ValueError(f"nominal_u must be one turn rate or one per robot ({len(rel)}), got {nominal_u!r}") from None
     if not np.all(np.isfinite(nominal)):
         raise ValueError("nominal_u contains NaN or infinite entries")
-    if not np.isfinite(lookahead) or lookahead < 0:
-        raise ValueError(f"lookahead must be a non-negative finite number of seconds, got {lookahead!r}")
+    lookahead = _check_lookahead(lookahead)
+    _check_positive("speed", speed)
+    if u_max is not None:
+        _check_positive("u_max", u_max)
     override = v <= a
     if lookahead > 0:
         ahead = dubins_step(rel, nominal, lookahead, speed)
@@ -68,7 +96,7 @@ def filter_control(value_fn, states, nominal_u, alpha, u_max=None, obstacles=Non
     return np.where(override, value_fn.safe_control(rel, u_max), nominal)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class SafetyController:
     """A minimally invasive controller at level ``alpha`` of ``value_fn`` (see ``filter_control``)."""
     value_fn: ValueFunction
@@ -76,24 +104,33 @@ class SafetyController:
     u_max: float = None
     lookahead: float = 0.0
 
+    def __repr__(self):
+        u_max = "the model's" if self.u_max is None else f"{self.u_max:.4g}"
+        return (f"SafetyController(alpha={self.alpha:.4g}, u_max={u_max}, lookahead={self.lookahead:.4g} s, "
+                f"value_fn: w_max={self.value_fn.w_max:.4g}, {self.value_fn.method})")
+
     def __call__(self, states, nominal_u, obstacles=None):
         return filter_control(self.value_fn, states, nominal_u, self.alpha, self.u_max, obstacles, self.lookahead)
 
 
 def safety_controller(value_fn, alpha, u_max=None, lookahead=0.0):
     """The minimally invasive safety controller at level ``alpha`` (e.g. ``mu + 2 sigma``, Sec. 4.5)."""
-    if not isinstance(value_fn, ValueFunction):
-        raise ValueError("value_fn must be a mutual.supervision.reachability.ValueFunction")
-    _check_alpha(alpha, 1)
+    _check_value_fn(value_fn)
+    if np.ndim(alpha) != 0:
+        raise ValueError(f"alpha must be one finite number, got {alpha!r}")
+    alpha = float(_check_alpha(alpha, 1)[0])
     if u_max is not None:
-        _check_positive("u_max", u_max)
-    return SafetyController(value_fn, alpha, u_max, lookahead)
+        u_max = _check_positive("u_max", u_max)
+    return SafetyController(value_fn, alpha, u_max, _check_lookahead(lookahead))
 
 
 def simulate_filtered(controller, states, nominal_u, duration, dt=0.02, speed=SPEED, obstacles=None):
     """Roll robots forward under ``controller`` with constant ``nominal_u``: states (T+1, n, 3)."""
+    if not callable(controller):
+        raise ValueError(f"controller must be callable as controller(states, nominal_u, obstacles), got {controller!r}")
     _check_positive("duration", duration)
     _check_positive("dt", dt)
+    _check_positive("speed", speed)
     s = check_states(states)
     path = [s]
     for _ in range(int(np.ceil(duration / dt))):
@@ -112,7 +149,18 @@ def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_dist
     judgement levels serve every ``alpha`` (common random numbers). Returns
     ``(rates (len(alphas),), closest margin to K over all robots)``.
     """
-    alphas = np.asarray(alphas, dtype=float).reshape(-1)
+    if not isinstance(supervisor, NoisySupervisor):
+        raise ValueError(f"supervisor must be a mutual.supervision.NoisySupervisor, got {type(supervisor).__name__}")
+    _check_value_fn(value_fn)
+    try:
+        alphas = np.asarray(alphas, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"alphas must be a sequence of finite levels, got {alphas!r}") from None
+    if len(alphas) == 0 or not np.all(np.isfinite(alphas)):
+        raise ValueError(f"alphas must be a non-empty sequence of finite levels, got {alphas.tolist()}")
+    n_robots = _check_count("n_robots", n_robots)
+    _check_rng(rng)
+    _check_positive("u_max", u_max)
     radius = value_fn.obstacle_radius
     starts = approach_scenes(n_robots, rng, radius, start_distance, dt=dt)[:, 0]
     states = np.tile(starts, (len(alphas), 1))
