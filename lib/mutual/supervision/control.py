@@ -60,6 +60,25 @@ def _check_alpha(alpha, n):
     return a
 
 
+def wilson_interval(rates, n, confidence=0.95):
+    """Wilson score interval ``(low, high)`` for observed rates (fractions of ``n`` trials, e.g. the
+    false-positive rates of ``n`` robots): the error bars of the chapter 4 figures."""
+    from scipy import stats
+
+    n = _check_count("n", n)
+    try:
+        r = np.atleast_1d(np.asarray(rates, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError(f"rates must be fractions in [0, 1], got {rates!r}") from None
+    if not np.all((r >= 0) & (r <= 1)):
+        raise ValueError(f"rates must be fractions in [0, 1], got {r.tolist()}")
+    c = _real(confidence)
+    if c is None or not 0 < c < 1:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+    ci = [stats.binomtest(int(round(x * n)), n).proportion_ci(confidence_level=c, method="wilson") for x in r]
+    return np.array([i.low for i in ci]), np.array([i.high for i in ci])
+
+
 def needs_override(value_fn, states, alpha, obstacles=None):
     """Whether each robot is at or below the ``alpha`` level of ``value_fn`` (bool (n,))."""
     _, v = _obstacle_frame(value_fn, states, obstacles)
@@ -139,7 +158,8 @@ def simulate_filtered(controller, states, nominal_u, duration, dt=0.02, speed=SP
     return np.stack(path)
 
 
-def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_distance, u_max=TRUE_W_MAX, dt=0.02):
+def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_distance, u_max=TRUE_W_MAX, dt=0.02,
+                         lowest_values=False):
     """Fraction of encounters in which ``supervisor`` intervenes on robots that *did* detect the obstacle.
 
     Each robot drives straight at the obstacle (``approach_scenes``) under the minimally invasive
@@ -147,7 +167,8 @@ def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_dist
     has passed; the supervisor judges each encounter once (one level ``mu - w``) and intervenes if
     the robot reaches it: every such intervention is a false positive (Sec. 4.5). The same robots and
     judgement levels serve every ``alpha`` (common random numbers). Returns
-    ``(rates (len(alphas),), closest margin to K over all robots)``.
+    ``(rates (len(alphas),), closest margin to K over all robots)``, and with ``lowest_values=True`` also
+    the lowest ``V_S`` each robot reached, ``(len(alphas), n_robots)`` (how far robots dip below a level).
     """
     if not isinstance(supervisor, NoisySupervisor):
         raise ValueError(f"supervisor must be a mutual.supervision.NoisySupervisor, got {type(supervisor).__name__}")
@@ -172,5 +193,8 @@ def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_dist
         states = dubins_step(states, u, dt)
         lowest = np.minimum(lowest, supervisor.value_fn.interp(states, fill_value=np.inf))
         closest = min(closest, float(np.min(np.hypot(states[:, 0], states[:, 1]) - radius)))
-    judged = lowest.reshape(len(alphas), n_robots) <= supervisor.thresholds(n_robots, rng)
+    lowest = lowest.reshape(len(alphas), n_robots)
+    judged = lowest <= supervisor.thresholds(n_robots, rng)
+    if lowest_values:
+        return judged.mean(axis=1), closest, lowest
     return judged.mean(axis=1), closest

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .control import wilson_interval
 from .dubins import TRUE_W_MAX, _check_positive, _real, check_states
 from .supervisor import NoisySupervisor, collect_interventions
 from .value_function import ValueFunction, ValueLibrary, unsafe_set_contains
@@ -102,6 +103,41 @@ def gaussian_mle(values):
 def _max_loglik(var, p):
     """``log L*`` of eq. (4.9): with ``sigma^2`` the mean squared deviation, the exponent is ``-p/2``."""
     return -0.5 * p * (np.log(2 * np.pi * var) + 1)
+
+
+def numerical_gaussian_fit(values, mu_min=None):
+    """A second algorithm for eqs. (4.8)-(4.9): maximise the Gaussian log-likelihood of each row of
+    ``values`` (b, p) numerically (scipy L-BFGS-B over ``mu`` and ``log sigma``) instead of by formula.
+
+    ``mu_min=None``: the MLE. ``mu_min=0``: the MAP estimate of Sec. 4.4 under the prior that is zero
+    for non-positive ``mu`` and uniform elsewhere (a bound ``mu >= 0``). Returns ``mu``, ``sigma`` and
+    the maximised log-likelihood per row.
+    """
+    from scipy import optimize
+
+    v = np.asarray(values, dtype=float)
+    if v.ndim != 2 or v.shape[1] < 2 or not np.all(np.isfinite(v)):
+        raise ValueError(f"values must be a finite (b, p >= 2) array, got shape {v.shape}")
+    out = []
+    for row in v:
+        scale = max(float(np.std(row)), 1e-12)
+
+        def negative_loglik(theta, row=row):
+            mu, log_sigma = theta
+            z = (row - mu) / np.exp(log_sigma)
+            nll = 0.5 * np.sum(z ** 2) + len(row) * (log_sigma + 0.5 * np.log(2 * np.pi))
+            grad = np.array([-np.sum(z) / np.exp(log_sigma), len(row) - np.sum(z ** 2)])
+            return nll, grad
+
+        # start away from the closed form (the median and twice the spread) so agreement is not by construction
+        start = np.array([float(np.median(row)) if mu_min is None else max(float(np.median(row)), mu_min + scale),
+                          np.log(2 * scale)])
+        bounds = [(mu_min, None), (None, None)]
+        res = optimize.minimize(negative_loglik, start, jac=True, method="L-BFGS-B", bounds=bounds,
+                                options={"ftol": 1e-15, "gtol": 1e-12, "maxiter": 10000})
+        out.append((res.x[0], np.exp(res.x[1]), -res.fun))
+    mus, sigmas, logliks = map(np.array, zip(*out))
+    return mus, sigmas, logliks
 
 
 @functools.lru_cache(maxsize=32)
@@ -221,4 +257,28 @@ def recovery_study(library, generators, n_values, seeds, start_distance, prior="
                 rows.append({"w_max": w_max, "mu": mu, "sigma": sigma, "seed": seed, "n": n, "w_max_hat": fit.w_max,
                              "mu_hat": fit.mu, "sigma_hat": fit.sigma, "recovered": fit.w_max == w_max,
                              "boundary": fit.boundary or ""})
+    return pd.DataFrame(rows)
+
+
+def recovery_summary(table, confidence=0.95):
+    """Summarise a :func:`recovery_study` table per (sigma, n), for a table of SIMULATED supervisors.
+
+    Columns: ``data`` ("simulated"), ``sigma``, ``n``, ``runs`` (generators x seeds), ``recovered``
+    (fraction choosing the generating ``w_max``) with its Wilson ``confidence`` interval
+    (``recovered_ci_low``, ``recovered_ci_high``), ``mean_w_max_error`` with its standard error
+    (``w_max_error_se``), ``mean_abs_mu_error`` and ``mean_sigma_ratio`` (``sigma_hat / sigma``).
+    """
+    needed = {"w_max", "mu", "sigma", "n", "w_max_hat", "mu_hat", "sigma_hat", "recovered"}
+    if not isinstance(table, pd.DataFrame) or needed - set(table.columns):
+        raise ValueError(f"table must be a recovery_study DataFrame with columns {sorted(needed)}")
+    rows = []
+    for (sigma, n), part in table.groupby(["sigma", "n"]):
+        k, runs = int(part["recovered"].sum()), len(part)
+        (low,), (high,) = wilson_interval(k / runs, runs, confidence)
+        error = part["w_max_hat"] - part["w_max"]
+        rows.append({"data": "simulated", "sigma": sigma, "n": n, "runs": runs, "recovered": k / runs,
+                     "recovered_ci_low": low, "recovered_ci_high": high,
+                     "mean_w_max_error": error.mean(), "w_max_error_se": error.std(ddof=1) / np.sqrt(runs),
+                     "mean_abs_mu_error": (part["mu_hat"] - part["mu"]).abs().mean(),
+                     "mean_sigma_ratio": (part["sigma_hat"] / part["sigma"]).mean()})
     return pd.DataFrame(rows)

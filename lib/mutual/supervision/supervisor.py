@@ -134,25 +134,26 @@ class NoisySupervisor:
         return states, scenes
 
 
-def collect_interventions(supervisor, n, rng, start_distance, dt=0.02, max_scenes=None):
+def collect_interventions(supervisor, n, rng, start_distance, dt=0.02, batch=None, max_scenes=None):
     """The first ``n`` intervention states (n, 3) of ``supervisor`` watching Phase II ``approach_scenes``.
 
-    Scenes are drawn in batches of ``2 n`` until ``n`` interventions are collected; raises a
-    ValueError (rather than looping forever) if ``max_scenes`` (default ``50 n``) scenes give fewer.
+    Scenes are drawn in batches of ``batch`` (default ``2 n``) until ``n`` interventions are collected;
+    raises a ValueError (rather than looping forever) if ``max_scenes`` (default ``50 n``) scenes give fewer.
     """
     if not isinstance(supervisor, NoisySupervisor):
         raise ValueError("supervisor must be a mutual.supervision.NoisySupervisor")
     n = _check_count("n", n)
+    batch = 2 * n if batch is None else _check_count("batch", batch)
     max_scenes = 50 * n if max_scenes is None else _check_count("max_scenes", max_scenes)
     states, watched = np.empty((0, 3)), 0
     while len(states) < n:
         if watched >= max_scenes:
             raise ValueError(f"the supervisor intervened only {len(states)} times in {watched} scenes (need n={n}): "
                              f"with mu={supervisor.mu:g}, sigma={supervisor.sigma:g} it rarely judges an approach unsafe")
-        batch = min(2 * n, max_scenes - watched)
+        size = min(batch, max_scenes - watched)
         more, _ = supervisor.first_interventions(
-            approach_scenes(batch, rng, supervisor.value_fn.obstacle_radius, start_distance, dt=dt), rng)
-        states, watched = np.vstack([states, more]), watched + batch
+            approach_scenes(size, rng, supervisor.value_fn.obstacle_radius, start_distance, dt=dt), rng)
+        states, watched = np.vstack([states, more]), watched + size
     return states[:n]
 
 
