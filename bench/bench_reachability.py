@@ -136,7 +136,8 @@ def run(quick=False):
         fresh = time.perf_counter() - start
         gap = max(float(np.abs(a.values - b).max()) for a, b in zip(ours, theirs))
         rows.append({
-            "benchmark": f"HJ library, compiled once ({len(few)} members, cold)", "case": f"{_shape(small)} nodes, w_max traced",
+            "benchmark": f"HJ library, compiled once ({len(few)} members, cold)",
+            "case": f"{_shape(small)} nodes, w_max traced",
             "seconds": ours_s, "baseline": "hj.step with a concrete DubinsCar per member (one compile per member, "
                                            "included)",
             "baseline_seconds": fresh, "compile_seconds": small_compile,

@@ -9,7 +9,8 @@ from scipy import stats
 
 from mutual.supervision.dubins import keep_out_margin
 from mutual.supervision.reachability import QUICK_GRID, value_library
-from mutual.supervision.supervisor import (approach_scenes, intervention_states, NoisySupervisor, read_interventions, validate_interventions, write_interventions)
+from mutual.supervision.supervisor import (NoisySupervisor, approach_scenes, intervention_states, read_interventions,
+                                           validate_interventions, write_interventions)
 from mutual.supervision.fit import LibraryEdgeWarning, fit_supervisor, gaussian_mle, recovery_study
 from mutual.supervision.supervisor import collect_interventions
 from mutual.supervision.control import filter_control, safety_controller, simulate_filtered
@@ -152,7 +153,8 @@ def test_interventions_csv_round_trip_and_validation(tmp_path):
     assert back["theta"].between(-np.pi, np.pi).all()
     assert np.allclose(intervention_states(back)[0], [-4.0, 0.5, 0.1])
     for broken, match in [(frame.drop(columns="theta"), "missing column .theta."), (frame.assign(extra=1), "unknown"),
-                          (frame.assign(trial=[0, 1.5, 2]), "trial"), (frame.assign(x=[0, np.nan, 1]), "row 1, column 'x': is empty"),
+                          (frame.assign(trial=[0, 1.5, 2]), "trial"),
+                          (frame.assign(x=[0, np.nan, 1]), "row 1, column 'x': is empty"),
                           (frame.assign(time=[-1, 0, 0]), "time")]:
         with pytest.raises(ValueError, match=match):
             validate_interventions(broken)

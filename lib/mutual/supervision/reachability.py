@@ -121,7 +121,8 @@ def _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_ma
     try:
         w = np.asarray(w_maxes, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"w_maxes must be a non-empty 1-D sequence of positive finite numbers, got {w_maxes!r}") from None
+        raise ValueError(f"w_maxes must be a non-empty 1-D sequence of positive finite numbers, "
+                         f"got {w_maxes!r}") from None
     if len(w) == 0 or not np.all(np.isfinite(w)) or np.any(w <= 0):
         raise ValueError(f"w_maxes must be a non-empty 1-D sequence of positive finite numbers, got {w_maxes!r}")
     if len(np.unique(w)) != len(w):

@@ -149,7 +149,8 @@ def collect_interventions(supervisor, n, rng, start_distance, dt=0.02, batch=Non
     while len(states) < n:
         if watched >= max_scenes:
             raise ValueError(f"the supervisor intervened only {len(states)} times in {watched} scenes (need n={n}): "
-                             f"with mu={supervisor.mu:g}, sigma={supervisor.sigma:g} it rarely judges an approach unsafe")
+                             f"with mu={supervisor.mu:g}, sigma={supervisor.sigma:g} it rarely judges an approach "
+                             "unsafe")
         size = min(batch, max_scenes - watched)
         more, _ = supervisor.first_interventions(
             approach_scenes(size, rng, supervisor.value_fn.obstacle_radius, start_distance, dt=dt), rng)
