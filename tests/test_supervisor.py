@@ -240,7 +240,7 @@ def test_notebook_reports_every_chapter_4_claim_with_its_computation(executed_no
     for key in ("c4-keepout-in-reachable", "c4-library-nested", "c4-conservative-supervisor-nesting",
                 "c4-mle-mean-variance", "c4-map-mu-clipped"):
         assert values[key] is True, key
-    assert values["c4-fit-recovers-wmax"] in list(0.25 * np.arange(1, 13))
+    assert values["c4-fig43-fit-wmax"] in list(0.25 * np.arange(1, 13))
     assert values["c4-alpha-2sigma-avoids-97pct"] > 0.95
     assert 0 <= values["c4-property-no-false-positives"] <= 1 and 0 <= values["c4-noisy-fp-at-mu"] <= 1
     assert values["c4-value-converges"] < 0.01
