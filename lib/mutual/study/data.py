@@ -88,8 +88,15 @@ def _numbers(df, col, where, whole=False, low=None, high=None, what="a number"):
         bad = values.to_numpy(dtype=float) > high
     if bad.any():
         i = _first(bad)
-        raise ValueError(f"{where.row(df, i)}, column {col!r}: {df[col].iloc[i]!r} is not {what}")
+        raise ValueError(f"{where.row(df, i)}, column {col!r}: {_show(df[col].iloc[i])} is not {what}")
     return values
+
+
+def _show(value):
+    """A cell as the user wrote it: text quoted, numbers plainly (9, not np.float64(9.0))."""
+    if isinstance(value, (int, float, np.number)) and not isinstance(value, bool):
+        return f"{float(value):g}"
+    return repr(value)
 
 
 def validate_trials(df, treatments=None, where=None):
