@@ -12,14 +12,14 @@ import pytest
 from mutual.study import explore
 from mutual.study.cohort import (avoidance_onset, fraction_inside, learned_set_cluster, simulate_study,
                                  simulated_recruits, study_value_functions, write_simulated_study)
-from mutual.study.data import read_table, validate_trials, write_table
+from mutual.study.data import illustrative_questionnaire, read_table, validate_trials, write_table
 from mutual.study.design import balanced_latin_square, comparison_label, design_balance, study_design
 from mutual.study.misalignment import straight_approach_starts, supervised_approaches
 from mutual.study.published import (design_from_f_dofs, f_p_value, recover_from_summary, rounding_range,
                                     table_5_1_ratios)
 from mutual.study.stats import (DegenerateDataError, greenhouse_geisser_epsilon, likert_vs_neutral, paired_t_holm,
                                 rm_anova, significance_stars, tukey_from_summary, tukey_rm)
-from mutual.study.teaming import Team, TeamingConfig, simulate_teaming
+from mutual.study.teaming import Team, TeamingConfig, simulate_teaming, task_layout
 from mutual.supervision.supervisor import NoisySupervisor
 
 
@@ -95,6 +95,7 @@ CASES = [
     (rm_anova, (GOOD, "y", "cond", "who"), {"levels": ("a", "b")}, ValueError, "level(s) ['c'] not among levels"),
     (rm_anova, (GOOD, "y", "cond", "who"), {"levels": ("a", "b", "c", "d")}, ValueError, "level(s) ['d'] of levels have no rows"),
     (rm_anova, (GOOD, "y", "cond", "who"), {"levels": ("a", "a", "b", "c")}, ValueError, "must not repeat"),
+    (rm_anova, (GOOD, "y", "cond", "who"), {"levels": "abc"}, ValueError, "levels must be a list of the levels of 'cond'"),
     # --- degenerate data: an error naming the measure and the reason, never NaN or a negative F
     (rm_anova, (GOOD.assign(y=0.0), "y", "cond", "who"), {}, DegenerateDataError,
      "'y' does not vary within subjects (every value is 0)"),
@@ -157,6 +158,8 @@ CASES = [
     (read_table, (File(TRIALS_OK + "P01,Standard-Learned,1,Standard,1\n"),), {}, ValueError, "line 3, column 'trial': missing value"),
     (read_table, (File('a,b\n1,"unclosed\n'),), {}, ValueError, "not a well-formed CSV file"),
     (read_table, (File(TRIALS_OK),), {"kind": "survey"}, ValueError, "kind must be one of"),
+    (read_table, (File(TRIALS_OK),), {"treatments": "Standard"}, ValueError, "treatments must be a list of names"),
+    (illustrative_questionnaire, (pd.DataFrame({"participant": [1]}),), {}, ValueError, "design must be a DataFrame with columns"),
     (read_table, (File(TRIALS_OK),), {"kind": "trials", "dv": "value"}, ValueError, "takes no option(s) ['dv']"),
     (read_table, (File(LONG),), {"kind": "long", "dv": "score"}, ValueError, "needs dv=, within= and subject="),
     (read_table, (File(LONG),), {"kind": "long", "dv": "score", "within": "cond", "subject": "subj"}, ValueError,
@@ -186,6 +189,10 @@ CASES = [
     (Team, ("not a value function",), {}, ValueError, "value must be a mutual.supervision.reachability.ValueFunction"),
     (TeamingConfig, (), {"detection_prob": 1.5}, ValueError, "detection_prob must lie in [0, 1]"),
     (TeamingConfig, (), {"n_robots": 0}, ValueError, "n_robots must be a positive integer"),
+    (TeamingConfig, (), {"n_robots": 2.5}, ValueError, "n_robots must be a positive integer"),
+    (TeamingConfig, (), {"removal_cost": float("nan")}, ValueError, "removal_cost must be a finite number"),
+    (TeamingConfig, (), {"obstacle_gap": -1.0}, ValueError, "obstacle_gap must be a non-negative number"),
+    (task_layout, (1.5, TeamingConfig()), {}, ValueError, "version must be a non-negative whole number"),
     (simulate_teaming, ([], [], []), {}, ValueError, "non-empty and equally long"),
     (simulate_teaming, ([Lib(team=1.0)], ["a supervisor"], [1]), {}, ValueError, "supervisors[0] must be a NoisySupervisor"),
     (simulate_teaming, ([Lib(team=1.0)], [Lib(supervisor=1.0)], [1.5]), {}, ValueError, "versions[0] must be a whole number"),

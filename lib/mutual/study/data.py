@@ -35,6 +35,7 @@ import pandas as pd
 
 from ..atomic import atomic_path
 from ..supervision.supervisor import OPTIONAL_COLUMNS, REQUIRED_COLUMNS, validate_interventions
+from .design import DESIGN_COLUMNS
 
 TRIAL_COLUMNS = ["participant", "comparison", "order", "treatment", "task_version", "trial", "measure", "value"]
 OBJECTIVE_MEASURES = ("trips", "interventions", "collisions", "false_positives", "score")
@@ -114,6 +115,8 @@ def validate_trials(df, treatments=None, where=None):
     for col in ("participant", "comparison", "treatment", "measure"):
         df[col] = df[col].astype(str).str.strip()
     if treatments is not None:
+        if isinstance(treatments, str) or not hasattr(treatments, "__iter__"):
+            raise ValueError(f"treatments must be a list of names, got {treatments!r}")
         allowed = [str(t) for t in treatments]
         bad = ~df["treatment"].isin(allowed).to_numpy()
         if bad.any():
@@ -258,6 +261,8 @@ def illustrative_questionnaire(design, seed=0):
     measure of ``LIKERT_MEASURES``, an answer drawn uniformly from 1..7, independent of the
     treatment. These numbers say nothing about the thesis's participants.
     """
+    if not isinstance(design, pd.DataFrame) or any(c not in design.columns for c in DESIGN_COLUMNS):
+        raise ValueError(f"design must be a DataFrame with columns {DESIGN_COLUMNS} (a study_design table)")
     rng = np.random.default_rng(seed)
     rows = design.loc[design.index.repeat(len(LIKERT_MEASURES))].reset_index(drop=True)
     rows["participant"] = rows["participant"].map(lambda p: p if isinstance(p, str) else f"P{int(p):02d}")

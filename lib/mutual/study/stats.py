@@ -155,6 +155,8 @@ def cell_table(data, dv, within, subject, aggregate=None, levels=None):
         raise ValueError(f"aggregate must be None or 'mean', got {aggregate!r}")
     d = data[[subject, within]].assign(**{dv: values.astype(float)})
     if levels is not None:
+        if isinstance(levels, str) or not hasattr(levels, "__iter__"):
+            raise ValueError(f"levels must be a list of the levels of {within!r}, got {levels!r}")
         levels = list(levels)
         if len(set(levels)) != len(levels):
             raise ValueError(f"levels must not repeat a level, got {levels}")

@@ -68,15 +68,24 @@ class TeamingConfig:
     removal_cost: float = 0.5
 
     def __post_init__(self):
+        def number(name):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) or not np.isfinite(v):
+                raise ValueError(f"{name} must be a finite number, got {v!r}")
+            return v
         for name in ("width", "height", "obstacle_radius", "duration", "dt", "near_distance", "goal_tolerance",
                      "heading_gain"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive number, got {v!r}")
+            if not number(name) > 0:
+                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
+        for name in ("depot_clearance", "obstacle_gap", "filter_margin", "trip_reward", "collision_cost",
+                     "removal_cost"):
+            if number(name) < 0:
+                raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")
         for name in ("n_robots", "n_obstacles"):
-            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
-                raise ValueError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
-        if not 0 <= self.detection_prob <= 1:
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+        if not 0 <= number("detection_prob") <= 1:
             raise ValueError(f"detection_prob must lie in [0, 1], got {self.detection_prob!r}")
         if self.width <= 2 * self.depot_clearance:
             raise ValueError("width must exceed twice depot_clearance")
@@ -98,6 +107,10 @@ def task_layout(version, config):
     Obstacles are placed uniformly in the middle of the workspace (``depot_clearance`` from
     each depot), at least ``obstacle_gap`` apart; robots start on alternating depots.
     """
+    if isinstance(version, bool) or not isinstance(version, (int, np.integer)) or version < 0:
+        raise ValueError(f"version must be a non-negative whole number (a task version), got {version!r}")
+    if not isinstance(config, TeamingConfig):
+        raise ValueError(f"config must be a TeamingConfig, got {type(config).__name__}")
     rng = np.random.default_rng([20_19, int(version)])
     obstacles = _free_positions(rng, config, config.n_obstacles)
     side = np.arange(config.n_robots) % 2
