@@ -252,7 +252,7 @@ def _drive(b, teams, config):
     engage = (np.take_along_axis(v_next, worst[..., None], 2)[..., 0] < 0) & (b.latched != worst)
     if engage.any():
         bi, ri = np.nonzero(engage)
-        rel_now = _relative(b.robots, b.obs)[bi, ri, worst[bi, ri]]
+        rel_now = np.concatenate([b.robots[bi, ri, :2] - b.obs[bi, worst[bi, ri]], b.robots[bi, ri, 2:]], axis=1)
         slope = stack.interp(rel_now, fill_value=0.0, derivative=True, rows=bi)
         # the optimal avoid control u* = w sign(dV/dtheta) of the team's model, clipped to the robots' turn rate
         w_model = np.minimum(stack.w_max[bi], TRUE_W_MAX)
@@ -262,9 +262,10 @@ def _drive(b, teams, config):
         nxt = dubins_step(b.robots.reshape(-1, 3), np.where(b.latched >= 0, b.turn, u).ravel(),
                           config.dt).reshape(n, R, 3)
     b.robots = nxt
-    held = np.take_along_axis(_relative(b.robots, b.obs), np.maximum(b.latched, 0)[..., None, None], 2)[:, :, 0]
-    approaching = held[..., 0] * np.cos(held[..., 2]) + held[..., 1] * np.sin(held[..., 2]) < 0
-    b.latched = np.where(approaching, b.latched, -1)
+    if (b.latched >= 0).any():
+        held = b.robots[..., :2] - np.take_along_axis(b.obs, np.maximum(b.latched, 0)[..., None], 1)
+        approaching = held[..., 0] * np.cos(b.robots[..., 2]) + held[..., 1] * np.sin(b.robots[..., 2]) < 0
+        b.latched = np.where(approaching, b.latched, -1)
 
 
 def _supervise(b, sups, config, rng):
@@ -295,8 +296,8 @@ def _supervise(b, sups, config, rng):
 
 def _end_trips(b, config, rng):
     """Collisions restart a trip from its depot, arrivals complete it; both draw a new goal and detections."""
-    rel = _relative(b.robots, b.obs)
-    crashed = np.any(np.hypot(rel[..., 0], rel[..., 1]) < config.obstacle_radius, axis=2)
+    gap = b.robots[:, :, None, :2] - b.obs[:, None, :, :]
+    crashed = np.any(np.hypot(gap[..., 0], gap[..., 1]) < config.obstacle_radius, axis=2)
     arrived = (np.abs(b.robots[..., 0] - b.goal_x) < config.goal_tolerance) & ~crashed
     b.counts["collisions"] += crashed.sum(axis=1)
     b.counts["trips"] += arrived.sum(axis=1)
