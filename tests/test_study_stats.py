@@ -380,3 +380,14 @@ def test_holm_matches_statsmodels():
     from mutual.study.stats import holm
     p = [0.01, 0.04, 0.03, 0.005, 0.2, 0.04]
     assert np.allclose(holm(p), multipletests(p, method="holm")[1])
+
+
+def test_pairwise_comparisons_are_json_ready(pairwise):
+    import json
+    from mutual.study.stats import pairwise_comparisons
+    res = rm_anova(pairwise, "Scores", "Drug", "Subject")
+    rows = pairwise_comparisons(res, as_records=True)
+    assert json.loads(json.dumps(rows)) == rows and len(rows) == 3
+    ab = next(r for r in rows if (r["A"], r["B"]) == ("A", "B"))
+    assert ab["p_tukey"] == pytest.approx(0.273106, abs=2e-6) and ab["p_t"] == pytest.approx(0.18598346, rel=1e-7)
+    assert ab["df"] == 10 and ab["diff"] == pytest.approx(res.means["A"] - res.means["B"])

@@ -12,9 +12,9 @@ notebook's live views (:mod:`.explore`).
 from .cohort import Study, simulate_study, write_simulated_study
 from .data import read_table, write_table
 from .design import study_design
-from .stats import DegenerateDataError, RMAnova, paired_t_holm, rm_anova, tukey_rm
+from .stats import DegenerateDataError, RMAnova, paired_t_holm, pairwise_comparisons, rm_anova, tukey_rm
 from .teaming import Team, TeamingConfig, simulate_teaming
 
-__all__ = ["DegenerateDataError", "RMAnova", "Study", "Team", "TeamingConfig", "paired_t_holm", "read_table",
-           "rm_anova", "simulate_study", "simulate_teaming", "study_design", "tukey_rm", "write_simulated_study",
-           "write_table"]
+__all__ = ["DegenerateDataError", "RMAnova", "Study", "Team", "TeamingConfig", "paired_t_holm", "pairwise_comparisons",
+           "read_table", "rm_anova", "simulate_study", "simulate_teaming", "study_design", "tukey_rm",
+           "write_simulated_study", "write_table"]

@@ -341,6 +341,23 @@ def holm(p):
     return out
 
 
+def pairwise_comparisons(anova, as_records=False):
+    """Every pair of levels of an :class:`RMAnova`: the RM-error Tukey HSD (``q``, ``p_tukey``) beside the
+    paired t-test with Holm's correction (``t``, ``df``, ``p_t``, ``p_holm``), one row per pair with
+    ``A``, ``B``, ``mean_A``, ``mean_B`` and ``diff = mean_A - mean_B``. ``as_records=True`` returns a list
+    of dicts of plain Python numbers and strings (ready for JSON). Raises :class:`DegenerateDataError` as
+    :func:`paired_t_holm` does."""
+    if not isinstance(anova, RMAnova):
+        raise ValueError(f"anova must be an RMAnova, got {type(anova).__name__}")
+    tukey = tukey_rm(anova).rename(columns={"p": "p_tukey"})
+    paired = paired_t_holm(anova).rename(columns={"p": "p_t"}).drop(columns="mean_diff")
+    table = tukey.merge(paired, on=["A", "B"], how="left")
+    if not as_records:
+        return table
+    plain = {"A": str, "B": str, "df": int}
+    return [{k: plain.get(k, float)(v) for k, v in row.items()} for row in table.to_dict("records")]
+
+
 def likert_vs_neutral(answers, neutral=4.0):
     """One-sample t-test of Likert answers against the neutral point (section 5.3.2).
 
