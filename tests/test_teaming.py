@@ -159,3 +159,10 @@ def test_following_the_supervisors_set_removes_false_alarms(functions):
     assert ignoring == 1.0
     assert 0.25 < at_mu < 0.75
     assert at_2sigma <= 0.1
+
+
+def test_record_repr_is_short(functions):
+    library, _ = functions
+    sup = NoisySupervisor(_member(library, 1.0), 0.2, 0.05)
+    _, record = simulate_teaming([Team(_member(library, 1.0))], [sup], [1], TeamingConfig(duration=2.0), record=0)
+    assert repr(record).startswith("TeamingRecord(") and len(repr(record)) < 120

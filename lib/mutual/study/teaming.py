@@ -91,7 +91,7 @@ class TeamingConfig:
             raise ValueError("width must exceed twice depot_clearance")
 
 
-@dataclass
+@dataclass(repr=False)
 class TeamingRecord:
     """Snapshots of one trial (for Fig. 5.3): robot states, obstacle centres, detections, times."""
     times: list = field(default_factory=list)
@@ -99,6 +99,11 @@ class TeamingRecord:
     obstacles: list = field(default_factory=list)
     detected: list = field(default_factory=list)
     removals: list = field(default_factory=list)
+
+    def __repr__(self):
+        span = f"{self.times[0]:g}-{self.times[-1]:g} s" if self.times else "empty"
+        robots = len(self.robots[0]) if self.robots else 0
+        return f"TeamingRecord({len(self.times)} snapshots, {span}, {robots} robots, {len(self.removals)} removals)"
 
 
 def task_layout(version, config):
