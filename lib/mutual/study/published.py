@@ -1,16 +1,20 @@
 """Re-deriving published repeated-measures statistics from their summary numbers (Sec. 5.3).
 
 The thesis reports F statistics with their degrees of freedom and the level means of Table 5.1,
-not the data. From them: the p-value of a reported F (:func:`f_p_value`), the design a one-way
+not the data. From them: the repeated-measures Tukey p-values of level means with a given error
+term (:func:`tukey_from_summary`, also used by :func:`mutual.study.stats.tukey_rm`), the p-value of a reported F (:func:`f_p_value`), the design a one-way
 repeated-measures F implies (:func:`design_from_f_dofs`), and the error term and the
 repeated-measures Tukey p-values (:func:`recover_from_summary`). These are checks of the thesis's
 arithmetic ("consistent"), not reproductions.
 """
 
+from itertools import combinations
+
 import numpy as np
+import pandas as pd
 from scipy import stats
 
-from .stats import DegenerateDataError, tukey_from_summary
+from .errors import DegenerateDataError
 
 
 def _positive_integer(name, value):
@@ -62,6 +66,36 @@ def recover_from_summary(means, F, df_num, df_den):
                                   f"positive F = {F} cannot come from them and no error term can be recovered")
     mse = float(ms_treatment / F)
     return {"n": n, "mse": mse, "p": f_p_value(F, df_num, df_den), "tukey": tukey_from_summary(means, mse, n)}
+
+
+def tukey_from_summary(means, mse, n):
+    """Tukey HSD p-values for all pairs from level means, a repeated-measures MSE and n subjects.
+
+    q = |m_i - m_j| / sqrt(MSE / n); p = P(Q > q) for the studentized range with
+    k = len(means) and (k-1)(n-1) degrees of freedom. Returns a DataFrame with
+    columns A, B, mean_A, mean_B, diff, q, p.
+    """
+    try:
+        means = {level: float(m) for level, m in dict(means).items()}
+    except (TypeError, ValueError):
+        raise ValueError(f"means must map each level to a number, got {means!r}") from None
+    k = len(means)
+    if k < 2:
+        raise ValueError(f"means needs at least 2 levels, got {k}")
+    bad = [level for level, m in means.items() if not np.isfinite(m)]
+    if bad:
+        raise ValueError(f"means must be finite numbers; level(s) {bad} are not")
+    if isinstance(mse, bool) or not isinstance(mse, (int, float, np.number)) or not (np.isfinite(mse) and mse > 0):
+        raise ValueError(f"mse must be a positive finite number, got {mse!r}")
+    if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and n >= 2):
+        raise ValueError(f"n must be an integer >= 2 (subjects), got {n!r}")
+    df = (k - 1) * (n - 1)
+    rows = []
+    for a, b in combinations(means, 2):
+        diff = means[a] - means[b]
+        q = abs(diff) / np.sqrt(mse / n)
+        rows.append((a, b, means[a], means[b], diff, q, float(stats.studentized_range.sf(q, k, df))))
+    return pd.DataFrame(rows, columns=["A", "B", "mean_A", "mean_B", "diff", "q", "p"])
 
 
 TABLE_5_1_COLUMNS = ["safe_set", "interventions_in_safe_set", "interventions", "predicted_fp_vs_standard",

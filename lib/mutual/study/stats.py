@@ -7,7 +7,9 @@
   q = |mean_i - mean_j| / sqrt(MSE / n), p from the studentized range with k levels and
   (k-1)(n-1) degrees of freedom; :func:`paired_t_holm`: paired t-tests, Holm-corrected.
 * :func:`likert_vs_neutral`: the one-sample t-test of Likert answers against the neutral point.
-* the thesis's own statistics, re-derived from its published numbers, are in :mod:`.published`.
+* the thesis's own statistics, re-derived from its published numbers, are in :mod:`.published`
+  (Tukey from summary numbers, ``f_p_value``, ``design_from_f_dofs``, ``recover_from_summary``;
+  importable from here too).
 
 Degenerate data. A statistic that the data leave undefined raises :class:`DegenerateDataError`
 (a ``ValueError``) that names the measure and the reason; nothing here returns NaN, an infinite
@@ -31,12 +33,10 @@ import pandas as pd
 from scipy import stats
 
 from .data import LIKERT_RANGE
+from .errors import DegenerateDataError
+from .published import design_from_f_dofs, f_p_value, recover_from_summary, tukey_from_summary  # noqa: F401
 
 _RELATIVE_ZERO = 1e-13
-
-
-class DegenerateDataError(ValueError):
-    """The data leave a statistic undefined (0/0 or a zero variance); the message says which and why."""
 
 
 def _negligible(sum_of_squares, values):
@@ -248,36 +248,6 @@ def _anova_from(data, dv, within, subject, aggregate, levels):
     if dv is None or within is None or subject is None:
         raise ValueError("pass an RMAnova, or long data with dv, within and subject column names")
     return rm_anova(data, dv, within, subject, aggregate, levels)
-
-
-def tukey_from_summary(means, mse, n):
-    """Tukey HSD p-values for all pairs from level means, a repeated-measures MSE and n subjects.
-
-    q = |m_i - m_j| / sqrt(MSE / n); p = P(Q > q) for the studentized range with
-    k = len(means) and (k-1)(n-1) degrees of freedom. Returns a DataFrame with
-    columns A, B, mean_A, mean_B, diff, q, p.
-    """
-    try:
-        means = {level: float(m) for level, m in dict(means).items()}
-    except (TypeError, ValueError):
-        raise ValueError(f"means must map each level to a number, got {means!r}") from None
-    k = len(means)
-    if k < 2:
-        raise ValueError(f"means needs at least 2 levels, got {k}")
-    bad = [level for level, m in means.items() if not np.isfinite(m)]
-    if bad:
-        raise ValueError(f"means must be finite numbers; level(s) {bad} are not")
-    if isinstance(mse, bool) or not isinstance(mse, (int, float, np.number)) or not (np.isfinite(mse) and mse > 0):
-        raise ValueError(f"mse must be a positive finite number, got {mse!r}")
-    if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and n >= 2):
-        raise ValueError(f"n must be an integer >= 2 (subjects), got {n!r}")
-    df = (k - 1) * (n - 1)
-    rows = []
-    for a, b in combinations(means, 2):
-        diff = means[a] - means[b]
-        q = abs(diff) / np.sqrt(mse / n)
-        rows.append((a, b, means[a], means[b], diff, q, float(stats.studentized_range.sf(q, k, df))))
-    return pd.DataFrame(rows, columns=["A", "B", "mean_A", "mean_B", "diff", "q", "p"])
 
 
 def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=None):
