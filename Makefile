@@ -20,7 +20,7 @@ NBSTRIP := $(BIN)/python -m mutual.compendium.hygiene
 LABFLAGS   ?=
 ALLOW_ROOT := $(if $(filter 0,$(shell id -u)),--allow-root)
 
-.PHONY: figures test bench bench-quick lab lock clean distclean env git-filter
+.PHONY: figures test bench bench-quick lab book test-browser lock clean distclean env git-filter
 
 ## figures: run every notebook (full parameters), rebuild figures/, data/ and figures/REPRODUCTION.md;
 ##          the only command that writes them (and the README's verdict counts)
@@ -51,6 +51,19 @@ lab: $(READY) git-filter
 	env -u MUTUAL_OUTPUT_DIR $(BIN)/jupyter lab --ServerApp.root_dir="$(CURDIR)" $(ALLOW_ROOT) \
 		--ContentsManager.pre_save_hook=mutual.compendium.hygiene.strip_before_save $(LABFLAGS) \
 		notebooks/00_overview.ipynb
+
+## book: the rendered book (Jupyter Book 2 / MyST) of the notebooks as `make figures` executed them
+##       (build/executed/), with the README, the report and the benchmarks, as a static site in build/book/;
+##       serve it with `python -m http.server -d build/book`. Needs node >= 18 and npm; the first run
+##       builds the site theme from book/theme with pinned npm packages (the npm registry, a few minutes)
+book: $(READY)
+	$(BIN)/python book/build.py
+
+## test-browser: headless Chromium (Debian's, apt-get installs it when missing) through Playwright:
+##               JupyterLab runs the overview and chapter 6 and moves a widget, the book's pages render;
+##               screenshots in build/screenshots/. Not part of `make test`; needs `make figures` and `make book`
+test-browser: $(READY) git-filter
+	$(BIN)/python -m pytest tests/browser -v -p no:cacheprovider
 
 ## env: create or refresh the pinned environment and the git filter
 env: $(READY) git-filter
