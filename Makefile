@@ -54,7 +54,7 @@ lab: $(READY) git-filter
 
 ## book: the rendered book (Jupyter Book 2 / MyST) of the notebooks as `make figures` executed them
 ##       (build/executed/), with the README, the report and the benchmarks, as a static site in build/book/;
-##       serve it with `python -m http.server -d build/book`. Needs node >= 18 and npm; the first run
+##       serve it with `.venv/bin/python book/serve.py`. Needs node >= 18 and npm; the first run
 ##       builds the site theme from book/theme with pinned npm packages (the npm registry, a few minutes)
 book: $(READY)
 	$(BIN)/python book/build.py

@@ -14,7 +14,8 @@
    The theme shows no live widgets, so each ipywidgets view in an executed notebook is replaced by
    its static state: a line naming the controls' initial values and the output the view drew then.
 3. **The site**: ``jupyter-book build --html`` (offline), moved to ``build/book/``. Serve it with
-   ``python -m http.server -d build/book`` (the pages use absolute paths, so ``file://`` does not work).
+   ``python book/serve.py`` (the pages use absolute paths, so ``file://`` does not work, and a server
+   that redirects ``/page`` to ``/page/``, like ``python -m http.server``, makes them reload forever).
 
 Every failure is one line naming what is missing and what to run.
 """
@@ -44,6 +45,7 @@ FIGURES = ROOT / "figures"
 WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 WIDGET_STATE = "application/vnd.jupyter.widget-state+json"
 NODE_MAJOR = 18
+THEME_RECIPE = "2"   # bump when build_theme's steps change, so that built themes are rebuilt
 # pages of the book, by the repository path that links point to
 PAGES = {"README.md": "index.md", "figures/REPRODUCTION.md": "reproduction.md",
          "figures/benchmarks.md": "benchmarks.md"}
@@ -72,7 +74,7 @@ def run(command, cwd, what, env=None, timeout=1800):
 
 def theme_fingerprint(source=THEME_SOURCE):
     """SHA-256 over the theme's source files (names and contents): the built theme is rebuilt when it changes."""
-    digest = hashlib.sha256()
+    digest = hashlib.sha256(THEME_RECIPE.encode() + b"\0")
     for path in sorted(p for p in source.rglob("*") if p.is_file()):
         digest.update(path.relative_to(source).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()
@@ -113,6 +115,14 @@ def build_theme(source=THEME_SOURCE, target=THEME):
         for name in ("lumino.css", "nouislider.css"):
             text = text.replace(f"@import './{name}';", f"/* @import './{name}'; */")
         css.write_text(text)
+    # Outputs that need Jupyter's renderers (HTML tables) get a renderer without MathJax: thebe's default
+    # loads MathJax 2 from a CDN on every page; without it they show LaTeX in such outputs as typed
+    passive = target / "node_modules" / "@myst-theme" / "jupyter" / "dist" / "passive.js"
+    text = passive.read_text()
+    if "core.makeRenderMimeRegistry()" not in text:
+        raise BookError(f"{passive}: no `core.makeRenderMimeRegistry()` to patch (a different @myst-theme/jupyter?)")
+    passive.write_text(text.replace("core.makeRenderMimeRegistry()",
+                                    "core.makeRenderMimeRegistry({ mathjaxUrl: '', mathjaxConfig: '' })"))
     bin_ = target / "node_modules" / ".bin"
     seconds = run([str(bin_ / "tailwindcss"), "-m", "-i", "./styles/app.css", "-o", "app/styles/app.css"],
                   target, "building the theme's stylesheet (tailwindcss)")
@@ -122,6 +132,10 @@ def build_theme(source=THEME_SOURCE, target=THEME):
     katex = target / "node_modules" / "katex" / "dist"
     shutil.copy2(katex / "katex.min.css", _mkdir(target / "public" / "build" / "katex") / "katex.min.css")
     shutil.copytree(katex / "fonts", target / "public" / "build" / "katex" / "fonts", dirs_exist_ok=True)
+    # thebe-core's scripts, which the theme's pages import on load (upstream's copy-thebe-assets; no maps)
+    thebe = target / "node_modules" / "thebe-core" / "dist" / "lib"
+    for asset in [*thebe.glob("*.js"), thebe / "thebe-core.css"]:
+        shutil.copy2(asset, target / "public" / asset.name)
     stamp.write_text(fingerprint + "\n")
 
 
@@ -337,7 +351,7 @@ def build_site(source=SOURCE, output=SITE):
     if output.exists():
         shutil.rmtree(output)
     shutil.move(str(html), str(output))
-    say(f"site: {_shown(output)} in {seconds:.0f} s (serve it: python -m http.server -d {_shown(output)})")
+    say(f"site: {_shown(output)} in {seconds:.0f} s (serve it: .venv/bin/python book/serve.py, then open http://127.0.0.1:8000)")
 
 
 def main(argv=None):

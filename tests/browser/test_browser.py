@@ -7,7 +7,7 @@ Headless Chromium (Debian's ``chromium``, installed with apt-get when missing) d
   committed notebook byte for byte as it was; chapter 6's notebook (a copy with ``quick = True``)
   runs all cells, its figures render, and dragging its Explore section's ``alpha`` slider changes
   the plotted output (the rendered image before and after differ);
-* the built book (``make book``), served by a local static server: the index and chapter 6's page
+* the built book (``make book``), served locally by ``book/serve.py``: the index and chapter 6's page
   with its figures, equations and the Explore section's static image, loading nothing from the internet.
 
 Screenshots go to ``build/screenshots/``; the servers this test starts are stopped at the end.
@@ -18,6 +18,7 @@ is built from the executed notebooks).
 import contextlib
 import json
 import os
+import re
 import secrets
 import shutil
 import signal
@@ -29,6 +30,7 @@ import urllib.request
 from pathlib import Path
 
 import pytest
+from playwright.sync_api import expect
 
 ROOT = Path(__file__).resolve().parents[2]
 SHOTS = ROOT / "build" / "screenshots"
@@ -51,7 +53,7 @@ def step(page, name):
     try:
         yield
     except Exception as err:  # noqa: BLE001 (every failure becomes one line naming the step)
-        shot = SHOTS / f"failed-{name.replace(' ', '-')}.png"
+        shot = SHOTS / f"failed-{re.sub(r'[^A-Za-z0-9]+', '-', name).strip('-')}.png"
         with contextlib.suppress(Exception):
             page.screenshot(path=str(shot), full_page=False)
         message = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
@@ -153,9 +155,9 @@ def book_server():
     if not (BOOK / "index.html").is_file():
         fail("no build/book/index.html: run `make figures` and `make book` first")
     port = free_port()
-    server = subprocess.Popen([sys.executable, "-m", "http.server", str(port), "--bind", "127.0.0.1",
-                               "--directory", str(BOOK)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                              start_new_session=True)
+    server = subprocess.Popen([sys.executable, str(ROOT / "book" / "serve.py"), "--port", str(port), str(BOOK)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+                              env={**os.environ, "BOOK_SERVER_QUIET": "1"})
     try:
         wait_for_http(f"http://127.0.0.1:{port}/", server, "the static server of build/book")
         yield f"http://127.0.0.1:{port}"
@@ -278,8 +280,9 @@ def test_book_index_and_chapter(browser, book_server):
         page.goto(f"{book_server}/", wait_until="networkidle")
         page.get_by_role("heading", level=1).first.wait_for(timeout=30_000)
         assert "Mutual understanding in motion" in page.title() + page.inner_text("body")
-        toc = page.inner_text("nav") if page.locator("nav").count() else page.inner_text("body")
-        assert "Chapter 6" in toc, "the table of contents does not list chapter 6"
+        toc = page.get_by_role("link", name="Chapter 6")
+        assert toc.count() >= 1, "the table of contents does not list chapter 6"
+        assert page.get_by_role("link", name="Reproduction report").count() >= 1, "no link to the reproduction report"
     page.screenshot(path=str(SHOTS / "book-index.png"))
     with step(page, "opening chapter 6's page"):
         page.get_by_role("link", name="Chapter 6").first.click()
@@ -292,9 +295,12 @@ def test_book_index_and_chapter(browser, book_server):
         assert page.locator(".katex").count() > 10, "the equations are not typeset (no KaTeX output)"
         katex_font = page.evaluate("() => getComputedStyle(document.querySelector('.katex')).fontFamily")
         assert "KaTeX" in katex_font, f"KaTeX's stylesheet did not load (font {katex_font!r})"
-        explore = page.get_by_text("Controls (their initial values").first
-        explore.scroll_into_view_if_needed()
-        assert "alpha = 1" in explore.inner_text(), explore.inner_text()
+        explore = page.get_by_text("Controls (their initial values", exact=False)
+        expect(explore.first).to_contain_text("alpha = 1", timeout=30_000)
+        page.get_by_role("heading", name="Explore").first.scroll_into_view_if_needed()
+        time.sleep(1)
+    page.screenshot(path=str(SHOTS / "book-chapter6-explore.png"))
+    page.evaluate("() => window.scrollTo(0, 0)")
     page.screenshot(path=str(SHOTS / "book-chapter6.png"))
     page.screenshot(path=str(SHOTS / "book-chapter6-full.png"), full_page=True)
     assert not outside, f"the book loaded from outside the local server: {sorted(set(outside))[:5]}"
