@@ -70,15 +70,16 @@ def all_single_candidates(mdp):
     return np.concatenate([~chance_forbidden(mdp, np.arange(X), 0.0), actions], axis=2)
 
 
-def gridworld_ranking(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4):
+def gridworld_ranking(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4, engine="numpy"):
     """A call that ranks the first ``n_candidates`` (default all X + A) single candidates
-    on a ``side`` x ``side`` gridworld by Algorithm 4 (``algorithm=4``) or 3."""
+    on a ``side`` x ``side`` gridworld by Algorithm 4 (``algorithm=4``, on ``engine``) or 3. The
+    multiply-add counts of :func:`counting_multiply_adds` watch the numpy engine's products."""
     if algorithm not in (3, 4):
         raise ValueError(f"algorithm: must be 3 or 4, got {algorithm!r}")
     g = gridworld(side, side, (0, 0), (side - 1, 0), slip=slip, horizon=horizon, sparse=sparse)
     masks = all_single_candidates(g.mdp)[:, :, :n_candidates]
     if algorithm == 4:
-        return lambda: log_partition(g.mdp, masks)
+        return lambda: log_partition(g.mdp, masks, engine=engine)
     full = np.ones(masks.shape[:2], dtype=bool)
     return lambda: value_ratio(g.mdp, full, masks)
 
