@@ -54,11 +54,19 @@ def gain_bounds(mdp, demos, mask, forbidden):
     if rows.size == 0:
         return np.zeros(K)
     groups, g = np.unique(k.astype(np.int64) * X + rows // A, return_inverse=True)
-    M = sp.csr_matrix((np.ones(rows.size), (g, rows)), shape=(groups.size, X * A))
-    mass = np.minimum(np.asarray(M @ pi.reshape(T, X * A).T), 1.0)          # (groups, T)
-    with np.errstate(divide="ignore"):
-        c = -np.log1p(-mass).max(axis=1)
     gx, gk = groups % X, groups // X
+    cut = np.zeros((groups.size, A), dtype=bool)                     # actions C+ newly forbids at x
+    cut[g, rows % A] = True
+    keep = mask[gx] & ~cut                                           # actions still allowed at x
+    c = np.empty(groups.size)
+    for chunk in range(0, groups.size, 4096):
+        part = slice(chunk, chunk + 4096)
+        # p_t(x) summed over the kept actions directly (no 1 - mass cancellation), 0 when none is kept
+        rows_pi = pi[:, gx[part], :]
+        p = np.einsum("tga,ga->gt", rows_pi, keep[part])
+        alive = rows_pi.sum(axis=2).T > 0.5          # C0 itself leaves x no action at other times:
+        with np.errstate(divide="ignore"):           # neither agent is ever there then
+            c[part] = np.where(alive, -np.log(np.where(alive, p, 1.0)), 0.0).max(axis=1)
     visits = np.bincount(gk, weights=N[gx], minlength=K)
     worst = np.zeros(K)
     np.maximum.at(worst, gk, c)

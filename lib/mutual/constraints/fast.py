@@ -72,11 +72,10 @@ def sentinel_is_exact(mdp):
 
 
 def block_size(mdp, n):
-    """Candidates per compiled block for ``n`` candidates: at most BLOCK_ENTRIES / (X A) (and 512),
-    split evenly and rounded up to a multiple of 16 so that few distinct shapes are compiled."""
-    cap = int(np.clip(BLOCK_ENTRIES // (mdp.n_states * mdp.n_actions), 16, 512))
-    per_block = int(np.ceil(n / np.ceil(n / cap)))
-    return int(np.ceil(per_block / 16) * 16)
+    """Candidates per compiled block for ``n`` candidates: the power of two (16..512) that holds
+    them, capped so that X A (block) stays within BLOCK_ENTRIES; few distinct shapes get compiled."""
+    cap = 2 ** int(np.clip(np.floor(np.log2(BLOCK_ENTRIES / (mdp.n_states * mdp.n_actions))), 4, 9))
+    return int(min(cap, 2 ** int(np.ceil(np.log2(max(n, 16))))))
 
 
 def _kernel():

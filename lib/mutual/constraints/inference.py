@@ -12,6 +12,7 @@ import pandas as pd
 
 from .backup import ENGINES, rank_candidates
 from .bounds import gain_bounds
+from .feasibility import infeasible_candidates
 from .candidates import Candidates, as_tasks, constraint_candidates
 from .demonstrations import sample_demonstrations
 from .mdp import check_mask
@@ -135,10 +136,16 @@ def _check_inputs(tasks, candidates, rounds, min_gain, criterion, prune, engine)
 
 
 def _pruned_round(tasks, candidates, idx, mask, floor, engine, first=32):
-    """Score only the candidates whose bound (:mod:`.bounds`) could beat the best exact score:
-    the ``first`` best-bounded ones, then every other one whose bound reaches the best so far."""
+    """Score only the candidates that keep the demonstrations feasible (:mod:`.feasibility`) and
+    whose bound (:mod:`.bounds`) could beat the best exact score: the ``first`` best-bounded ones,
+    then every other one whose bound reaches the best score so far."""
     total = sum(d.n for _, d in tasks)
-    bound = sum(gain_bounds(m, d, mask, candidates.forbidden_matrix[:, idx]) * d.n / total for m, d in tasks)
+    columns = candidates.forbidden_matrix[:, idx]
+    dead = np.zeros(idx.size, dtype=bool)
+    for m, d in tasks:
+        dead |= infeasible_candidates(m, d, mask, columns)
+    bound = np.full(idx.size, -np.inf)
+    bound[~dead] = sum(gain_bounds(m, d, mask, columns[:, ~dead]) * d.n / total for m, d in tasks)
     order = np.argsort(-bound, kind="stable")
     log_f, gain = np.full(idx.size, np.nan), np.full(idx.size, -np.inf)
     head = order[:first][bound[order[:first]] >= floor]

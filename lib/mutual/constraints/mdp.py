@@ -35,8 +35,8 @@ MAX_VALUE = 1e100  # |r| T + |w| must stay below this: values far inside the flo
 class MDP:
     """A validated finite-horizon MDP (Section 2.2.1).
 
-    ``transitions``: S(x, a, x') as a dense ``(X, A, X)`` array or a sparse
-    ``(X*A, X)`` matrix; ``reward``: r(x, a) as ``(X, A)`` (or ``(X,)``, the same
+    ``transitions``: S(x, a, x') as a dense ``(X, A, X)`` array or an ``(X*A, X)``
+    matrix (dense or sparse; row ``x*A + a``); ``reward``: r(x, a) as ``(X, A)`` (or ``(X,)``, the same
     for every action); ``terminal_reward``: w(x) as ``(X,)`` (default 0);
     ``horizon``: T >= 1; ``initial``: p_0 as ``(X,)`` (default uniform);
     ``allowed``: the actions each state offers, boolean ``(X, A)`` (default all).
@@ -124,8 +124,10 @@ def _check_transitions(S):
         n_states = S.shape[1]
     else:
         S = _float_array(S, "transitions")
+        if S.ndim == 2 and S.shape[1] and S.shape[0] and S.shape[0] % S.shape[1] == 0:
+            S = S.reshape(S.shape[1], -1, S.shape[1])          # the (X*A, X) layout of MDP.transitions
         if S.ndim != 3 or S.shape[0] != S.shape[2] or S.shape[0] == 0 or S.shape[1] == 0:
-            raise ValueError(f"transitions: a dense S must have shape (X, A, X), got {S.shape}")
+            raise ValueError(f"transitions: a dense S must have shape (X, A, X) or (X*A, X), got {S.shape}")
         n_states = S.shape[0]
         P = np.ascontiguousarray(S.reshape(-1, n_states))
         values, row_sums = P, P.sum(axis=1)
