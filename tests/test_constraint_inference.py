@@ -224,7 +224,7 @@ def test_counted_work_is_one_pass_over_S_per_candidate_and_step(sparse):
     assert tally["multiply_adds"] == T * touched * (K + 1)  # plus the baseline backup of C0
     assert gridworld_ranking_work(4, sparse=sparse, horizon=5) == T * touched * K
     with pytest.raises(ValueError, match="algorithm"):
-        gridworld_ranking_work(4, algorithm=2)
+        gridworld_ranking_work(4, algorithm=1)
 
 
 def test_horizon_sensitivity_reruns_round_one_per_horizon():

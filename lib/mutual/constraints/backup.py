@@ -174,7 +174,6 @@ def constraint_accrual(mdp, base_mask, masks):
     """
     pi = soft_policy(mdp, check_mask(mdp, base_mask, "base_mask"))
     masks = _masks(mdp, masks)
-    P_T = mdp.transitions.T
     out = np.empty(masks.shape[2])
     for block in _blocks(mdp, masks.shape[2]):
         violates = ~masks[:, :, block]
@@ -184,8 +183,8 @@ def constraint_accrual(mdp, base_mask, masks):
             # lines 24 and 33: H(t+1) = sum_{x,a} (H + phi (D - H)) P(a|x) S(x, a, .)
             W = np.where(violates, D[:, None, None], H[:, None, :])
             W *= pi[t][:, :, None]
-            H = np.asarray(P_T @ W.reshape(-1, W.shape[2]))
-            D = np.asarray(P_T @ (D[:, None] * pi[t]).ravel())
+            H = _mdp._transpose_times(mdp, W.reshape(-1, W.shape[2]))
+            D = _mdp._transpose_times(mdp, (D[:, None] * pi[t]).ravel())
         out[block] = 1.0 - H.sum(axis=0)
     return out
 

@@ -166,6 +166,12 @@ def _times_transitions(mdp, V):
     return mdp.transitions @ V
 
 
+def _transpose_times(mdp, W):
+    """S^T (an (X, X*A) matrix) times W: the forward pass of Algorithms 1-2 (state-action mass
+    to next-state mass)."""
+    return np.asarray(mdp.transitions.T @ W)
+
+
 def masked_logsumexp(Q, forbidden, axis=1):
     """log sum_a exp(Q) over the allowed entries; overwrites ``Q`` (eq. 2.21).
 
