@@ -32,7 +32,7 @@ import scipy.sparse as sp
 LOW, DEAD = -1e300, -1e150
 MIN_PROBABILITY = 1e-140
 MAX_OFFSETS = 27
-BLOCK_ENTRIES = 2 ** 24   # X * A * (candidates per block): 128 MiB of float64 per (X, A, K) temporary
+BLOCK_ENTRIES = 2 ** 18   # X * A * (candidates per block): 2 MiB of float64 per (X, A, K) temporary
 
 _FORMS = weakref.WeakKeyDictionary()
 _EXACT = weakref.WeakKeyDictionary()
@@ -72,9 +72,10 @@ def sentinel_is_exact(mdp):
 
 
 def block_size(mdp, n):
-    """Candidates per compiled block for ``n`` candidates: the power of two (16..512) that holds
-    them, capped so that X A (block) stays within BLOCK_ENTRIES; few distinct shapes get compiled."""
-    cap = 2 ** int(np.clip(np.floor(np.log2(BLOCK_ENTRIES / (mdp.n_states * mdp.n_actions))), 4, 9))
+    """Candidates per compiled block: the power of two (16..64) that keeps one (X, A, block)
+    temporary within BLOCK_ENTRIES (cache-sized; larger blocks measured slower), or fewer when
+    ``n`` is smaller. Few distinct shapes get compiled."""
+    cap = 2 ** int(np.clip(np.floor(np.log2(BLOCK_ENTRIES / (mdp.n_states * mdp.n_actions))), 4, 6))
     return int(min(cap, 2 ** int(np.ceil(np.log2(max(n, 16))))))
 
 

@@ -154,7 +154,7 @@ def _pruned_round(tasks, candidates, idx, mask, floor, engine, first=32):
     rest = order[first:][bound[order[first:]] >= max(best, floor)]
     if rest.size:
         log_f[rest], gain[rest] = score_candidates(tasks, candidates, idx[rest], mask, engine)
-    return log_f, gain, head.size + rest.size
+    return log_f, gain, head.size + rest.size, dead
 
 
 def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=None, criterion="F", prune=False,
@@ -188,7 +188,8 @@ def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=No
         idx = np.flatnonzero(available)
         log_f, gain = np.full(len(candidates), np.nan), np.full(len(candidates), -np.inf)
         if prune:
-            log_f[idx], gain[idx], n_scored = _pruned_round(tasks, candidates, idx, mask, floor, engine)
+            log_f[idx], gain[idx], n_scored, dead = _pruned_round(tasks, candidates, idx, mask, floor, engine)
+            available[idx[dead]] = False     # infeasible now, so under every tighter mask too
         else:
             (log_f[idx], gain[idx]), n_scored = score_candidates(tasks, candidates, idx, mask, engine), idx.size
         scored.append(int(n_scored))
