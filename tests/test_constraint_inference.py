@@ -260,3 +260,13 @@ def test_latest_recovery_is_the_worst_case():
     assert latest_recovery([3, "not reached"]) == "not reached"
     with pytest.raises(ValueError, match="rounds"):
         latest_recovery([])
+
+
+def test_compiled_engine_stays_float64_over_many_blocks():
+    # blocks run on worker threads; each must run in float64 (jax's x64 switch is thread-local)
+    g = gridworld(6, 5, (0, 0), (5, 0), slip=0.1)
+    rng = np.random.default_rng(5)
+    masks = rng.random((30, 9, 300)) < 0.9
+    a, b = log_partition(g.mdp, masks, engine="numpy"), log_partition(g.mdp, masks, engine="jax")
+    np.testing.assert_array_equal(np.isneginf(a), np.isneginf(b))
+    np.testing.assert_allclose(a[np.isfinite(a)], b[np.isfinite(b)], rtol=1e-13, atol=1e-13)

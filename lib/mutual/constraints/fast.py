@@ -24,7 +24,9 @@ the numpy backup -- when that fails, when the successors need more than ``MAX_OF
 distinct offsets, or when jax is not installed.
 """
 
+import os
 import weakref
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import scipy.sparse as sp
@@ -32,6 +34,7 @@ import scipy.sparse as sp
 LOW, DEAD = -1e300, -1e150
 MIN_PROBABILITY = 1e-140
 MAX_OFFSETS = 27
+THREADS = min(2, os.cpu_count() or 1)   # blocks run concurrently (the compendium's machines have 2 cores)
 BLOCK_ENTRIES = 2 ** 18   # X * A * (candidates per block): 2 MiB of float64 per (X, A, K) temporary
 
 _FORMS = weakref.WeakKeyDictionary()
@@ -134,15 +137,30 @@ def backup_blocks(mdp, form, masks_of, n, demos=None):
     with jax.enable_x64(True):
         args = [jnp.asarray(a) for a in (P, mdp.reward, mdp.terminal_reward)]
         rev = [jnp.asarray(a[::-1].copy()) for a in (dx, da, valid)]
-        for start in range(0, n, kb):
-            block = slice(start, min(start + kb, n))
+        run = _kernel()
+
+        def one(block):
             masks = masks_of(block)
             pad = kb - masks.shape[2]
             forbidden = np.concatenate([~masks, np.broadcast_to(~mdp.allowed[:, :, None], (X, mdp.n_actions, pad))],
                                        axis=2)
-            V, ll, infeasible = _kernel()(*args, jnp.asarray(forbidden), *rev, offsets=offsets, pad_lo=pad_lo,
-                                          pad_hi=pad_hi)
-            V, ll, infeasible = (np.asarray(a)[..., : masks.shape[2]] for a in (V, ll, infeasible))
-            V0[:, block] = np.where(V <= DEAD, -np.inf, V)
-            log_lik[block] = np.where(infeasible, -np.inf, ll)
+            with jax.enable_x64(True):      # a thread-local setting: each worker enters it
+                out = run(*args, jnp.asarray(forbidden), *rev, offsets=offsets, pad_lo=pad_lo, pad_hi=pad_hi)
+                _collect((block, out), V0, log_lik)
+
+        blocks = [slice(start, min(start + kb, n)) for start in range(0, n, kb)]
+        if len(blocks) == 1 or THREADS == 1:
+            for block in blocks:
+                one(block)
+        else:          # XLA releases the GIL while a block runs: one block per core at a time
+            with ThreadPoolExecutor(THREADS) as pool:
+                list(pool.map(one, blocks))
     return V0, log_lik
+
+
+def _collect(item, V0, log_lik):
+    block, (V, ll, infeasible) = item
+    k = block.stop - block.start
+    V, ll, infeasible = (np.asarray(a)[..., :k] for a in (V, ll, infeasible))
+    V0[:, block] = np.where(V <= DEAD, -np.inf, V)
+    log_lik[block] = np.where(infeasible, -np.inf, ll)
