@@ -193,22 +193,33 @@ def large_rows(quick):
 
 
 def bandwidth_rows(quick):
+    """Achieved bandwidth = compulsory bytes / time (each operand read once, the result written once)."""
     n = 10_000_000 if not quick else 2_000_000
     a, b, c = np.ones(n), np.ones(n), np.ones(n)
     triad = best_time(lambda: np.add(b, np.multiply(c, 3.0, out=a), out=a), 5)
     stream = 3 * 8 * n / triad / 1e9
     side = 40 if not quick else 20
-    g = gridworld(side, side, (0, 0), (side - 1, 0), slip=0.1, sparse=True)
+    g, demos = _world(side, sparse=True)
     K = 256
     V = np.asfortranarray(np.random.default_rng(0).normal(size=(g.mdp.n_states, K)))
     S = g.mdp.transitions
     t = best_time(lambda: S @ V, 5)
-    moved = (S.nnz * 12 + (S.shape[0] + 1) * 4) * K / 64 + V.nbytes + S.shape[0] * K * 8
-    achieved = moved / t / 1e9
-    return [_row(f"sparse backup product S @ V, {side}x{side} grid, {K} candidates (scipy CSR)", t,
+    moved = S.nnz * 12 + (S.shape[0] + 1) * 4 + V.nbytes + S.shape[0] * K * 8
+    rows = [_row(f"sparse backup product S @ V, {side}x{side} grid, {K} candidates (scipy CSR, numpy engine)", t,
                  "numpy triad a = b + 3 c (streaming bandwidth)", None,
-                 agree=f"{achieved:.1f} GB/s of {stream:.1f} GB/s = {achieved / stream:.2f} of the triad "
-                       "(bytes: S once per 64 columns, V read once, result written once)")]
+                 agree=f"{moved / t / 1e9:.1f} GB/s of {stream:.1f} GB/s = {moved / t / 1e9 / stream:.2f} of the triad "
+                       "(S and V read once, S V written once)")]
+    masks = ~constraint_candidates(g.mdp, demos).forbidden[:, :, :K]
+    log_partition(g.mdp, masks, engine="jax")
+    t = best_time(lambda: log_partition(g.mdp, masks, engine="jax"), 3)
+    X, A, T = g.mdp.n_states, g.mdp.n_actions, g.mdp.horizon
+    per_step = X * K * 8 * 2 + X * A * K                     # V read and written, the boolean mask read
+    rows.append(_row(f"compiled stencil backup, {side}x{side}, {K} candidates, T={T} (jax engine)", t,
+                     "numpy triad", None,
+                     agree=f"{per_step * T / t / 1e9:.1f} GB/s of {stream:.1f} GB/s = {per_step * T / t / 1e9 / stream:.2f} "
+                           f"of the triad: compute-bound, {X * A * K * T / t / 1e9:.2f} G exp/s (one exp per x, a, "
+                           "candidate and step)"))
+    return rows
 
 
 def explore_rows(quick):
