@@ -75,11 +75,12 @@ def sentinel_is_exact(mdp):
 
 
 def block_size(mdp, n):
-    """Candidates per compiled block: the power of two (16..64) that keeps one (X, A, block)
-    temporary within BLOCK_ENTRIES (cache-sized; larger blocks measured slower), or fewer when
-    ``n`` is smaller. Few distinct shapes get compiled."""
-    cap = 2 ** int(np.clip(np.floor(np.log2(BLOCK_ENTRIES / (mdp.n_states * mdp.n_actions))), 4, 6))
-    return int(min(cap, 2 ** int(np.ceil(np.log2(max(n, 16))))))
+    """Candidates per compiled block: a power of two from 16 up to the largest that keeps one
+    (X, A, block) temporary within BLOCK_ENTRIES (cache-sized; larger blocks measured slower),
+    chosen to pad ``n`` candidates least (ties: the larger block). Few distinct shapes get compiled."""
+    cap = int(np.clip(np.floor(np.log2(BLOCK_ENTRIES / (mdp.n_states * mdp.n_actions))), 4, 6))
+    sizes = [2 ** e for e in range(4, cap + 1)]
+    return min(sizes, key=lambda b: (-(-max(n, 1) // b) * b, -b))
 
 
 def _kernel():
