@@ -27,7 +27,7 @@ from mutual.compendium.paths import NOTEBOOKS, results_dir  # noqa: E402
 # skips their strictness checks. test_claims_strict fails once a listed notebook is updated, so the
 # set only shrinks.
 AWAITING_PROVENANCE = {
-    "05_legibility_lqr", "06_evident_safety",
+    "06_evident_safety",
 }
 
 _PROVENANCE_SHIM = textwrap.dedent('''
