@@ -28,6 +28,7 @@ import re
 import shutil
 import subprocess
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -230,7 +231,8 @@ def static_widget_outputs(model_id, states):
         return []
     line = ("Controls (their initial values; move them in JupyterLab, `make lab`): " + "; ".join(controls)
             if controls else "A widget (live in JupyterLab, `make lab`)")
-    return [{"output_type": "stream", "name": "stdout", "text": line + "\n"}] + outputs
+    text = textwrap.fill(line, width=88, break_long_words=False, subsequent_indent="  ")
+    return [{"output_type": "stream", "name": "stdout", "text": text + "\n"}] + outputs
 
 
 def static_widgets(nb):

@@ -139,7 +139,16 @@ def lab():
                "--ContentsManager.pre_save_hook=mutual.compendium.hygiene.strip_before_save",
                "--LabApp.news_url=None", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
                "--LabApp.expose_app_in_browser=True"] + (["--allow-root"] if os.geteuid() == 0 else [])
-    env = {**os.environ, "MUTUAL_OUTPUT_DIR": str(WORK / "scratch"), "JUPYTER_CONFIG_DIR": str(WORK / "jupyter-config")}
+    # the kernels draw as a reader's do (inline), not with the Agg backend tests/conftest.py sets for pytest
+    env = {**{k: v for k, v in os.environ.items() if k != "MPLBACKEND"}, "MUTUAL_OUTPUT_DIR": str(WORK / "scratch"), "JUPYTER_CONFIG_DIR": str(WORK / "jupyter-config"),
+           "JUPYTERLAB_SETTINGS_DIR": str(WORK / "lab-settings"), "JUPYTERLAB_WORKSPACES_DIR": str(WORK / "lab-workspaces")}
+    WORK.mkdir(parents=True, exist_ok=True)
+    # every cell in the page (JupyterLab 4 otherwise renders only the cells in view), and no news toast
+    for plugin, settings in (("notebook-extension/tracker", {"windowingMode": "none"}),
+                             ("apputils-extension/notification", {"fetchNews": "false"})):
+        path = WORK / "lab-settings" / "@jupyterlab" / f"{plugin}.jupyterlab-settings"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(settings))
     log = open(WORK / "lab.log", "w")
     server = subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
     try:
@@ -212,7 +221,7 @@ def test_overview_runs_and_saves_unchanged(browser, lab):
         open_notebook(page, base, token, "notebooks/00_overview.ipynb")
     with step(page, "running all cells of the overview"):
         run_all(page)
-        summary = page.locator(".jp-RenderedMarkdown", has_text="Summary:")
+        summary = page.locator(".jp-OutputArea .jp-RenderedMarkdown", has_text="Summary:")
         summary.first.wait_for(timeout=30_000)
         assert "reproduced" in summary.first.inner_text(), "the verdict summary line is not rendered"
         assert page.locator(".jp-OutputArea-output table").count() >= 1, "the chapter x verdict table is not rendered"
@@ -240,6 +249,7 @@ def test_chapter_six_figures_and_widget(browser, lab):
     with step(page, "checking that the figures render"):
         images = rendered_images(page)
         assert len(images) >= 4 and all(w > 100 and h > 100 for w, h in images), f"rendered figures {images}"
+    page.locator(".jp-OutputArea-output img").first.scroll_into_view_if_needed()
     page.screenshot(path=str(SHOTS / "lab-chapter6.png"))
     interact = page.locator(".widget-interact").last
     output = interact.locator(".jp-OutputArea-output img").first

@@ -20,6 +20,7 @@ import argparse
 import ast
 import asyncio
 import os
+import queue
 import re
 import signal
 import sys
@@ -37,6 +38,7 @@ from .runs import kernel_env, run_mode, shown
 KERNEL = "mutual"
 CELL_TIMEOUT = 1800      # seconds per cell
 INTERRUPT_GRACE = 10     # seconds an interrupted kernel gets to unwind its cell before it is killed
+POLL_SLICE = 1.0         # seconds: the longest single wait on a kernel socket (see _poll_in_slices)
 KERNEL_ENV = {"TQDM_DISABLE": "1", "PYDEVD_DISABLE_FILE_VALIDATION": "1"}
 KERNEL_START = ["--IPKernelApp.exec_lines=import mutual.compendium.runs as _runs; _runs.quiet_progress_bars(); del _runs"]
 _TEMPORARY = re.compile(r"^\..+\.[a-z0-9_]{8}(\.[A-Za-z0-9]+)?$")  # mutual.atomic's temporary files
@@ -119,6 +121,30 @@ def temporaries(since):
     return sorted(found)
 
 
+def _poll_in_slices(channel, slice_s=POLL_SLICE):
+    """Make ``channel.get_msg(timeout)`` wait in slices of at most ``slice_s`` seconds.
+
+    nbclient's mimic of the Output widget (``interact`` views) sends on the shell socket while the
+    cell's reply is awaited on that same zmq.asyncio socket; now and then that wait misses its wake-up
+    and a single poll then sleeps until the cell times out (30 min), with the kernel long idle
+    (jupyter/nbclient#312). Each new poll looks at the socket afresh, so a missed wake-up costs at most
+    one slice."""
+    get_msg = channel.get_msg
+
+    async def sliced(timeout=None):
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            left = slice_s if deadline is None else min(slice_s, max(0.0, deadline - time.monotonic()))
+            try:
+                return await get_msg(timeout=left)
+            except queue.Empty:
+                if deadline is not None and time.monotonic() >= deadline:
+                    raise
+
+    channel.get_msg = sliced
+    return channel
+
+
 class _Run:
     """One kernel executing one notebook, and what happened to it."""
 
@@ -139,6 +165,8 @@ class _Run:
                                      resources={"metadata": {"path": str(self.path.parent)}})
         await self.client.async_start_new_kernel(env=self.env, stdout=self.log, stderr=self.log)
         await self.client.async_start_new_kernel_client()
+        for channel in (self.client.kc.shell_channel, self.client.kc.iopub_channel):
+            _poll_in_slices(channel)
         info = await self.client.async_wait_for_reply(await ensure_async(self.client.kc.kernel_info()))
         if info is not None and "language_info" in info["content"]:
             self.nb.metadata["language_info"] = info["content"]["language_info"]
