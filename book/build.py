@@ -28,7 +28,6 @@ import re
 import shutil
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
@@ -99,10 +98,10 @@ def build_theme(source=THEME_SOURCE, target=THEME):
     stamp = target / ".built-from"
     fingerprint = theme_fingerprint(source)
     if stamp.is_file() and stamp.read_text().strip() == fingerprint and (target / "build" / "index.js").is_file():
-        say(f"site theme: up to date in {target.relative_to(ROOT)}")
+        say(f"site theme: up to date in {_shown(target)}")
         return
     check_node()
-    say(f"site theme: building into {target.relative_to(ROOT)} (npm ci from the npm registry, then Tailwind "
+    say(f"site theme: building into {_shown(target)} (npm ci from the npm registry, then Tailwind "
         "and Remix; a few minutes, once)")
     if target.exists():
         shutil.rmtree(target)
@@ -190,6 +189,9 @@ def widget_states(nb):
     return {key: value.get("state", {}) for key, value in widgets.get("state", {}).items()}
 
 
+_NOT_CONTROLS = ("LabelModel", "HTMLModel", "HTMLMathModel", "ImageModel", "ProgressStyleModel")
+
+
 def _children(state):
     return [c[len("IPY_MODEL_"):] for c in state.get("children", []) if isinstance(c, str) and c.startswith("IPY_MODEL_")]
 
@@ -220,7 +222,7 @@ def static_widget_outputs(model_id, states):
         state = states[key]
         if state.get("_model_name") == "OutputModel":
             outputs.extend(state.get("outputs", []))
-        elif "value" in state and state.get("_model_name") not in ("LabelModel", "HTMLModel", "HTMLMathModel"):
+        elif ("value" in state or "index" in state) and state.get("_model_name") not in _NOT_CONTROLS:
             name = state.get("description") or state.get("_model_name", "control").replace("Model", "")
             controls.append(f"{name} = {_shown_value(state)}")
         for child in _children(state):
@@ -229,10 +231,14 @@ def static_widget_outputs(model_id, states):
     walk(model_id)
     if not seen:
         return []
-    line = ("Controls (their initial values; move them in JupyterLab, `make lab`): " + "; ".join(controls)
-            if controls else "A widget (live in JupyterLab, `make lab`)")
-    text = textwrap.fill(line, width=88, break_long_words=False, subsequent_indent="  ")
-    return [{"output_type": "stream", "name": "stdout", "text": text + "\n"}] + outputs
+    lines = ["Controls (their initial values; move them in JupyterLab, `make lab`):" if controls
+             else "A widget (live in JupyterLab, `make lab`)"]
+    for control in controls:  # a few per line, never split inside one
+        if len(lines) > 1 and len(lines[-1]) + len(control) + 2 <= 88:
+            lines[-1] += "; " + control
+        else:
+            lines.append("  " + control)
+    return [{"output_type": "stream", "name": "stdout", "text": "\n".join(lines) + "\n"}] + outputs
 
 
 def static_widgets(nb):
@@ -269,11 +275,11 @@ def executed_notebooks(executed=EXECUTED, notebooks=NOTEBOOKS):
     for notebook in sorted(notebooks.glob("[0-9][0-9]_*.ipynb")):
         copy = executed / notebook.name
         if not copy.is_file():
-            raise BookError(f"no executed copy of {notebook.relative_to(ROOT)} in {_shown(executed)}: "
+            raise BookError(f"no executed copy of {_shown(notebook)} in {_shown(executed)}: "
                             "run `make figures` first (the book shows the notebooks as it executed them)")
         nb, current = json.loads(copy.read_text()), json.loads(notebook.read_text())
         if _sources(nb) != _sources(current):
-            raise BookError(f"{_shown(copy)} is older than {notebook.relative_to(ROOT)} (its cells changed since "
+            raise BookError(f"{_shown(copy)} is older than {_shown(notebook)} (its cells changed since "
                             "it was executed): run `make figures` again")
         errors = [o for c in nb["cells"] for o in c.get("outputs", []) if o.get("output_type") == "error"]
         if errors:

@@ -306,7 +306,7 @@ def test_book_index_and_chapter(browser, book_server):
         katex_font = page.evaluate("() => getComputedStyle(document.querySelector('.katex')).fontFamily")
         assert "KaTeX" in katex_font, f"KaTeX's stylesheet did not load (font {katex_font!r})"
         explore = page.get_by_text("Controls (their initial values", exact=False)
-        expect(explore.first).to_contain_text("alpha = 1", timeout=30_000)
+        expect(explore.first).to_contain_text("alpha = 1;", timeout=30_000)
         page.get_by_role("heading", name="Explore").first.scroll_into_view_if_needed()
         time.sleep(1)
     page.screenshot(path=str(SHOTS / "book-chapter6-explore.png"))
