@@ -16,6 +16,10 @@ ROOT = Path(__file__).resolve().parents[1]
 BINDER = ROOT / "binder"
 
 
+def canonical(name):
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
 def lock_requirements():
     """``{name: version}`` of environment.lock, each pinned with ``==`` and at least one hash."""
     text = (ROOT / "environment.lock").read_text().replace("\\\n", " ")
@@ -98,7 +102,6 @@ def test_binder_steps_in_a_clean_venv(tmp_path):
     pins = lock_requirements()
     frozen = subprocess.run([str(python), "-m", "pip", "freeze", "--all"], env=env, capture_output=True, text=True,
                             check=True).stdout
-    installed = dict(l.split("==", 1) for l in frozen.splitlines() if "==" in l)
-    installed = {k.lower(): v for k, v in installed.items()}
-    wrong = {n: (v, installed.get(n)) for n, v in pins.items() if installed.get(n.replace("_", "-"), installed.get(n)) != v}
+    installed = {canonical(k): v for k, v in (l.split("==", 1) for l in frozen.splitlines() if "==" in l)}
+    wrong = {n: (v, installed.get(canonical(n))) for n, v in pins.items() if installed.get(canonical(n)) != v}
     assert not wrong, f"the Binder venv differs from the lock: {dict(list(wrong.items())[:5])}"
