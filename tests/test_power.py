@@ -93,7 +93,7 @@ def test_reported_f_effect_sizes():
     rng = np.random.default_rng(4)
     y = rng.normal(size=(11, 3)) + [1.0, 0.2, -0.5]
     long = pd.DataFrame({"s": np.repeat(np.arange(11), 3), "t": np.tile(TREATMENTS, 11), "v": y.ravel()})
-    a = st.rm_anova(long, "v", "s", "t", levels=TREATMENTS)
+    a = st.rm_anova(long, dv="v", within="t", subject="s", levels=TREATMENTS)
     resid = y - y.mean(1, keepdims=True) - y.mean(0) + y.mean()
     ss_eff, ss_err = 11 * np.sum((y.mean(0) - y.mean()) ** 2), np.sum(resid ** 2)
     est = pw.effect_size_from_f(a.F, a.df_num, a.df_den)

@@ -14,7 +14,7 @@ def _study_analysis(y):
     levels = [f"L{j}" for j in range(y.shape[1])]
     long = pd.DataFrame({"s": np.repeat(np.arange(y.shape[0]), y.shape[1]), "t": np.tile(levels, y.shape[0]),
                          "v": y.ravel()})
-    a = st.rm_anova(long, "v", "s", "t", levels=levels)
+    a = st.rm_anova(long, dv="v", within="t", subject="s", levels=levels)
     return a, st.tukey_rm(a), st.paired_t_holm(a.cells)
 
 
@@ -35,10 +35,29 @@ def test_batch_analysis_equals_the_study_functions(n, m, seed):
         assert (res.tukey_reject(0.05)[r] == (tukey["p"].to_numpy() < 0.05)).all()
 
 
-def test_batch_analysis_marks_tables_without_error_variance():
-    y = np.array([[[1.0, 2.0, 3.0], [2.0, 3.0, 4.0], [0.0, 1.0, 2.0]]])  # additive: no residual
+DEGENERATE = {
+    "zero residual": [[1.0, 2.0, 3.0], [2.0, 3.0, 4.0], [0.0, 1.0, 2.0]],
+    "no within-subject variation": [[2.0, 2.0, 2.0], [5.0, 5.0, 5.0], [1.0, 1.0, 1.0]],
+}
+
+
+@pytest.mark.parametrize("name", sorted(DEGENERATE))
+def test_batch_analysis_leaves_undefined_what_the_study_refuses(name):
+    """Where the study's rm_anova raises DegenerateDataError the batch gives NaN, which never rejects."""
+    y = np.array(DEGENERATE[name])
+    with pytest.raises(st.DegenerateDataError):
+        _study_analysis(y)
+    res = rb.rm_analyses(y[None])
+    assert np.isnan(res.F[0]) and np.isnan(res.q[0]).all() and not res.tukey_reject()[0].any()
+    assert not (res.p_gg < 0.05).any()
+
+
+def test_batch_paired_t_is_undefined_for_constant_differences():
+    y = np.array([[1.0, 2.0, 0.5], [2.0, 3.0, 4.0], [0.0, 1.0, 2.5], [4.0, 5.0, 1.0]])  # levels 0 and 1 differ by 1
+    with pytest.raises(st.DegenerateDataError, match="paired differences"):
+        st.paired_t_holm(pd.DataFrame(y))
     res = rb.rm_analyses(y)
-    assert np.isnan(res.F[0]) and not res.tukey_reject()[0].any()
+    assert np.isnan(res.t[0, 0]) and np.isfinite(res.t[0, 1:]).all() and np.isfinite(res.F[0])
 
 
 @pytest.mark.parametrize("f, rho, n", [(0.3, 0.5, 12), (0.25, 0.7, 10), (0.4, 0.2, 8)])

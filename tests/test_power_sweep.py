@@ -14,6 +14,7 @@ import pytest
 
 from mutual.study import cohort
 from mutual.study import cohort_power as cp
+from mutual.study import power_summary as ps
 from mutual.study import power_plots, sweep
 
 TINY = cp.CohortSetting(n_scenes=10, trial_seconds=3.0, quick_grid=True)
@@ -63,22 +64,22 @@ def test_cohorts_depend_only_on_their_parameters(library, tasks, inline):
 
 
 def test_prefixes_are_the_smaller_cohorts(inline):
-    y5, y3 = cp.analysed_outcomes(inline, 5), cp.analysed_outcomes(inline, 3)
+    y5, y3 = ps.analysed_outcomes(inline, 5), ps.analysed_outcomes(inline, 3)
     assert np.array_equal(y5[:, :3], y3)
     with pytest.raises(ValueError, match="fewer than 6"):
-        cp.analysed_outcomes(inline, 6)
+        ps.analysed_outcomes(inline, 6)
 
 
 def test_power_table_and_recommendations(inline):
-    table = cp.power_table(inline, [3, 4, 5])
+    table = ps.power_table(inline, [3, 4, 5])
     assert set(table["n"]) == {3, 4, 5} and (table["cohorts"] == 4).all()
     assert ((table["ci_low"] <= table["power"]) & (table["power"] <= table["ci_high"])).all()
     gg = table[(table["test"] == "anova_gg") & (table["n"] == 5)].iloc[0]
     from mutual.study.rm_batch import rm_analyses
-    assert gg["rejections"] == int(np.sum(rm_analyses(cp.analysed_outcomes(inline, 5)).p_gg < 0.05))
-    rec = cp.recommendations(table)
-    assert set(rec["test"]) == set(cp.KEY_TESTS) and (rec["largest n"] == 5).all()
-    effect = cp.implied_effect(inline)
+    assert gg["rejections"] == int(np.sum(rm_analyses(ps.analysed_outcomes(inline, 5)).p_gg < 0.05))
+    rec = ps.recommendations(table)
+    assert set(rec["test"]) == set(ps.KEY_TESTS) and (rec["largest n"] == 5).all()
+    effect = ps.implied_effect(inline)
     assert effect["participants"] == 20 and 0 <= effect["eta2p"] < 1 and 0.5 - 1e-9 <= effect["epsilon"] <= 1 + 1e-9
 
 
@@ -161,7 +162,7 @@ def test_command_line_analytic_json(capsys):
     doc = json.loads(capsys.readouterr().out)
     assert doc["analytic"]["eta2p_bias_corrected"] == pytest.approx(pw.effect_size_from_f(8.72, 2, 20).eta2p_unbiased)
     assert cli.main(["--analytic-only", "--from-f", "8.72", "2", "21"]) == 2
-    assert "not an uncorrected one-way" in capsys.readouterr().err
+    assert "is not a one-way repeated-measures design" in capsys.readouterr().err
 
 
 def test_command_line_simulation_json(capsys, tmp_path, monkeypatch):
@@ -170,7 +171,7 @@ def test_command_line_simulation_json(capsys, tmp_path, monkeypatch):
     assert cli.main(["--quick", "--inline", "--n", "3:4", "--cohorts", "2", "--json", "--no-progress"]) == 0
     doc = json.loads(capsys.readouterr().out)["simulated"]
     assert doc["SIMULATED"] and doc["n"] == [3, 4] and doc["sweep"]["computed"] == 2
-    assert {r["test"] for r in doc["power"]} >= set(cp.KEY_TESTS)
+    assert {r["test"] for r in doc["power"]} >= set(ps.KEY_TESTS)
     assert cli.main(["--quick", "--inline", "--n", "3:4", "--cohorts", "2", "--json", "--no-progress"]) == 0
     assert json.loads(capsys.readouterr().out)["simulated"]["sweep"]["cached"] == 2
 

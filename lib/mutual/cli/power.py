@@ -106,7 +106,7 @@ def analytic(args):
 
 
 def simulate(args):
-    from ..study import cohort, cohort_power as cp, sweep
+    from ..study import cohort, cohort_power as cp, power_summary as ps, sweep
 
     if args.cohorts < 1:
         raise ValueError(f"--cohorts must be a positive integer, got {args.cohorts}")
@@ -119,8 +119,8 @@ def simulate(args):
     cohorts, stats = sweep.run_tasks(cp.simulate_cohort, tasks, shared=(library, conservative), cache=cache,
                                      scheduler="inline" if args.inline else args.scheduler, workers=args.workers,
                                      progress=not args.no_progress, desc="cohorts")
-    table = cp.power_table(cohorts, sizes, args.alpha)
-    return setting, sizes, table, cp.recommendations(table), cp.implied_effect(cohorts), stats
+    table = ps.power_table(cohorts, sizes, args.alpha)
+    return setting, sizes, table, ps.recommendations(table), ps.implied_effect(cohorts), stats
 
 
 def run(args):

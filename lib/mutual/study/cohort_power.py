@@ -2,7 +2,7 @@
 
 A *cohort* is a stream of simulated recruits, each drawn from the documented supervisor types of
 :func:`mutual.study.cohort.simulated_recruits` (Fig. 5.5's spread) in the proportions of a
-``mix``, with judgement noise ``sigma`` multiplied by ``noise_scale``. Each recruit goes through
+``mix``, with the range of their judgement noise ``sigma`` (``cohort.SIGMA_RANGE``) scaled by ``noise_scale``. Each recruit goes through
 the study exactly as in :func:`mutual.study.cohort.simulate_study`: Phase II interventions, the
 maximum-likelihood fit (eq. 4.12), the exclusion rule (Sec. 5.2.1), then the six Phase III trials of
 their row of the counterbalanced design (:func:`mutual.study.design.study_design`). Recruits are
@@ -20,8 +20,9 @@ the binomial intervals too narrow. One cohort's Phase III trials run in one batc
 stream), so a cohort depends on ``(setting, cohort index, n_max, seed)`` and on nothing else:
 never on the worker that ran it.
 
-The analysis is the study notebook's (RM-ANOVA with the Greenhouse-Geisser correction, RM Tukey,
-paired t with Holm), vectorized over cohorts by :mod:`.rm_batch`.
+The analysis of the simulated cohorts (the study notebook's, vectorized) is in :mod:`.power_summary`,
+so that changing it never invalidates cached cohorts: :func:`code_version` hashes only the simulation's
+sources (any edit to them, docstrings included, means new cohorts).
 """
 
 import hashlib
@@ -34,12 +35,9 @@ import pandas as pd
 
 from ..supervision.dubins import TRUE_W_MAX
 from ..supervision.fit import fit_supervisor
-from ..supervision.reachability import unsafe_set_contains
-from ..supervision.supervisor import NoisySupervisor
+from ..supervision.reachability import ValueFunction, ValueLibrary, unsafe_set_contains
 from . import cohort as _cohort
 from .design import TREATMENTS, study_design
-from .power import recommended_n, wilson_interval
-from .rm_batch import level_pairs, rm_analyses
 from .teaming import Team, TeamingConfig, simulate_teaming
 
 # recruits per 12 of each documented type (mutual.study.cohort.simulated_recruits); fixed before any run
@@ -123,13 +121,12 @@ def code_version():
 
 
 def recruit(library, kind, noise_scale, rng):
-    """One SIMULATED recruit of ``kind`` (:func:`mutual.study.cohort.simulated_recruits`), noise scaled."""
-    people, sups = _cohort.simulated_recruits(library, (kind,), seed=int(rng.integers(2 ** 63)))
-    sup = sups[0]
-    if noise_scale != 1.0:
-        sup = NoisySupervisor(sup.value_fn, sup.mu, sup.sigma * noise_scale)
+    """One SIMULATED recruit of ``kind`` (:func:`mutual.study.cohort.simulated_recruits`), with the
+    judgement noise range ``SIGMA_RANGE`` multiplied by ``noise_scale``."""
+    sigma_range = tuple(noise_scale * v for v in _cohort.SIGMA_RANGE)
+    people, sups = _cohort.simulated_recruits(library, (kind,), seed=int(rng.integers(2 ** 63)), sigma_range=sigma_range)
     row = people.iloc[0]
-    return sup, {"kind": kind, "w_max": float(row["w_max"]), "mu": float(row["mu"]), "sigma": sup.sigma}
+    return sups[0], {"kind": kind, "w_max": float(row["w_max"]), "mu": float(row["mu"]), "sigma": float(row["sigma"])}
 
 
 def _phase2(library, standard, sup, n_scenes, rng):
@@ -149,6 +146,13 @@ def simulate_cohort(task, library, conservative, max_recruits_per_analysed=20):
     """SIMULATE one cohort (module docstring): one row per recruit, in recruitment order, with the
     generating parameters, the fit, ``excluded``, and for analysed recruits ``fp_<treatment>``, the
     mean false positives per trial with each safe set (NaN for excluded recruits)."""
+    if not isinstance(task, CohortTask):
+        raise ValueError(f"task must be a CohortTask, got {type(task).__name__}")
+    if not isinstance(library, ValueLibrary) or not isinstance(conservative, ValueFunction):
+        raise ValueError("library must be a ValueLibrary and conservative a ValueFunction "
+                         "(mutual.study.cohort.study_value_functions)")
+    if library.grid_spec != conservative.grid_spec:
+        raise ValueError("conservative must share the library's grid")
     s = task.setting
     standard = library[library.index_of(TRUE_W_MAX)]
     kinds = [k for k, _ in MIXES[s.mix]]
@@ -177,80 +181,3 @@ def simulate_cohort(task, library, conservative, max_recruits_per_analysed=20):
           .groupby(["recruit", "treatment"])["fp"].mean().unstack()[list(TREATMENTS)])
     fp.columns = list(FP_COLUMNS)
     return people.join(fp, on="recruit")
-
-
-def analysed_outcomes(cohorts, n):
-    """``(C, n, 3)`` false positives of the first ``n`` analysed participants of each cohort table."""
-    out = []
-    for table in cohorts:
-        kept = table[~table["excluded"]]
-        if len(kept) < n:
-            raise ValueError(f"cohort {int(table['cohort'].iloc[0])} has {len(kept)} analysed participants, fewer than {n}")
-        out.append(kept[list(FP_COLUMNS)].to_numpy(dtype=float)[:n])
-    return np.stack(out)
-
-
-def power_table(cohorts, n_values, alpha=0.05, confidence=0.95):
-    """Power of each test at each ``n`` over the simulated ``cohorts`` (tables of :func:`simulate_cohort`
-    of one setting), with Wilson intervals: one row per (n, test). Tests: ``anova_gg`` (the omnibus
-    RM-ANOVA, Greenhouse-Geisser corrected), ``anova`` (uncorrected), ``tukey <A>-<B>`` and
-    ``holm <A>-<B>`` per pair. A cohort whose statistic is undefined (no error variance) counts
-    as not significant; ``undefined`` counts them."""
-    names = [f"{TREATMENTS[i]}-{TREATMENTS[j]}" for i, j in level_pairs(len(TREATMENTS))]
-    rows = []
-    for n in n_values:
-        res = rm_analyses(analysed_outcomes(cohorts, n))
-        tests = {"anova_gg": res.p_gg < alpha, "anova": res.p < alpha}
-        tukey, holm = res.tukey_reject(alpha), res.p_holm < alpha
-        for k, name in enumerate(names):
-            tests[f"tukey {name}"], tests[f"holm {name}"] = tukey[:, k], holm[:, k]
-        undefined = int(np.isnan(res.F).sum())
-        for test, reject in tests.items():
-            hits = int(np.sum(reject))
-            lo, hi = wilson_interval(hits, len(reject), confidence)
-            rows.append({"n": int(n), "test": test, "cohorts": len(reject), "rejections": hits,
-                         "power": hits / len(reject), "ci_low": float(lo), "ci_high": float(hi),
-                         "undefined": undefined})
-    return pd.DataFrame(rows)
-
-
-def implied_effect(cohorts, n=None):
-    """The population effect the simulation implies, from the pooled analysed participants (the
-    first ``n`` of each cohort; all by default): level ``means`` and covariance ``cov`` of the false
-    positives per trial, the error variance ``tr(C cov C) / (m - 1)`` (C centres the levels), the
-    partial effect ``f_p^2 = var(means) / error variance`` (so ``lambda = f_p^2 N m``), its
-    ``eta2p``, the Greenhouse-Geisser ``epsilon`` of ``cov``, the mean correlation ``rho`` and the
-    standardized paired difference ``dz`` of each pair (:func:`mutual.study.rm_batch.level_pairs`)."""
-    y = np.concatenate([t[~t["excluded"]][list(FP_COLUMNS)].to_numpy(dtype=float)[:n] for t in cohorts])
-    m = y.shape[1]
-    means, cov = y.mean(axis=0), np.cov(y, rowvar=False)
-    c = np.eye(m) - 1.0 / m
-    dc = c @ cov @ c
-    err = np.trace(dc) / (m - 1)
-    fp2 = float(np.mean((means - means.mean()) ** 2) / err)
-    sd = np.sqrt(np.diag(cov))
-    corr = cov / np.outer(sd, sd)
-    dz = {f"{TREATMENTS[i]}-{TREATMENTS[j]}": float((means[i] - means[j]) / np.sqrt(cov[i, i] + cov[j, j] - 2 * cov[i, j]))
-          for i, j in level_pairs(m)}
-    return {"participants": len(y), "means": dict(zip(TREATMENTS, means.tolist())), "cov": cov, "error_variance": float(err),
-            "f_partial": float(np.sqrt(fp2)), "eta2p": fp2 / (1 + fp2),
-            "epsilon": float(np.trace(dc) ** 2 / ((m - 1) * np.sum(dc ** 2))),
-            "rho": float(corr[np.triu_indices(m, 1)].mean()), "dz": dz}
-
-
-KEY_TESTS = ("anova_gg", "tukey Standard-Learned", "holm Standard-Learned")
-
-
-def recommendations(table, targets=(0.8, 0.9), tests=KEY_TESTS):
-    """Recommended N per test and target power from a :func:`power_table`: ``n`` where the estimated
-    power reaches the target and stays there (:func:`mutual.study.power.recommended_n`), and
-    ``n_conservative`` where the lower end of its Wilson interval does; None beyond the largest N."""
-    rows = []
-    for test in tests:
-        sub = table[table["test"] == test]
-        if sub.empty:
-            raise ValueError(f"the table has no rows for test {test!r}")
-        for t in targets:
-            rows.append({"test": test, "target": t, "n": recommended_n(sub["n"], sub["power"], t),
-                         "n_conservative": recommended_n(sub["n"], sub["ci_low"], t), "largest n": int(sub["n"].max())})
-    return pd.DataFrame(rows)

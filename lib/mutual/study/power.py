@@ -28,6 +28,8 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
+from .published import design_from_f_dofs
+
 
 def _positive_int(name, value, least):
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
@@ -109,17 +111,6 @@ def rm_anova_sample_size(power, m, f=None, partial_eta_squared=None, rho=None, e
     return int(lo)
 
 
-def design_from_f_dofs(df1, df2):
-    """Levels ``m = df1 + 1`` and subjects ``N = df2 / df1 + 1`` of a one-way repeated-measures F."""
-    if not (np.isfinite(df1) and np.isfinite(df2) and df1 >= 1 and df2 >= 1):
-        raise ValueError(f"degrees of freedom must be >= 1, got ({df1!r}, {df2!r})")
-    n = df2 / df1 + 1
-    if not (float(df1).is_integer() and float(n).is_integer()):
-        raise ValueError(f"F({df1}, {df2}) is not an uncorrected one-way repeated-measures F "
-                         "(df2 must be a multiple of df1)")
-    return int(df1 + 1), int(n)
-
-
 @dataclass(frozen=True)
 class EffectSizeEstimate:
     """Effect size of a one-way repeated-measures design read from a reported ``F(df1, df2)``.
@@ -198,7 +189,8 @@ def effect_size_from_f(F, df1, df2, confidence=0.95):
     :class:`EffectSizeEstimate`). E.g. the thesis's ``F(2, 20) = 8.72`` (Sec. 5.3.1)."""
     if not (np.isfinite(F) and F >= 0):
         raise ValueError(f"F must be a non-negative number, got {F!r}")
-    m, n = design_from_f_dofs(df1, df2)
+    shape = design_from_f_dofs(df1, df2)  # raises for an F that is not one-way repeated measures
+    m, n = shape["levels"], shape["subjects"]
     if df2 <= 2:
         raise ValueError(f"df2 must exceed 2 for the unbiased noncentrality, got {df2!r}")
     to_eta = lambda lam: lam / (lam + n * m)

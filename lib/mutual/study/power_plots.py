@@ -24,7 +24,7 @@ def plot_simulated_power(ax, table, test, label, color, marker="o", offset=0.0):
     if rows.empty:
         raise ValueError(f"the table has no rows for test {test!r}; tests: {sorted(table['test'].unique())}")
     y = rows["power"].to_numpy()
-    err = np.vstack([y - rows["ci_low"].to_numpy(), rows["ci_high"].to_numpy() - y])
+    err = np.maximum(np.vstack([y - rows["ci_low"].to_numpy(), rows["ci_high"].to_numpy() - y]), 0.0)  # rounding at 0 and 1
     ax.errorbar(rows["n"].to_numpy() + offset, y, yerr=err, fmt=marker, ms=3.5, lw=0.9, capsize=2, color=color,
                 label=label)
 

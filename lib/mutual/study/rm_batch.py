@@ -20,6 +20,9 @@ import numpy as np
 from scipy import stats
 
 
+_RELATIVE_ZERO = 1e-13  # as mutual.study.stats: sums of squares this small relative to the data are zero
+
+
 @functools.lru_cache(maxsize=256)
 def tukey_critical_value(alpha, m, df):
     """``q(alpha; m, df)`` of the studentized range (cached: scipy integrates it numerically)."""
@@ -35,8 +38,9 @@ def level_pairs(m):
 class BatchRM:
     """Analyses of ``R`` tables of ``n`` subjects x ``m`` levels (arrays over the first axis; pair
     columns in :func:`level_pairs` order). ``diff`` = mean_i - mean_j, ``q`` the Tukey statistic,
-    ``t`` / ``p_paired`` / ``p_holm`` the paired t-tests. Undefined statistics (no error variance)
-    are NaN."""
+    ``t`` / ``p_paired`` / ``p_holm`` the paired t-tests. Statistics the data leave undefined (where
+    the study's functions raise :class:`mutual.study.errors.DegenerateDataError`: no within-subject
+    variation, zero residual variance, constant paired differences) are NaN, and never reject."""
     n: int
     m: int
     F: np.ndarray
@@ -93,9 +97,12 @@ def rm_analyses(y):
     resid = y - subj[:, :, None] - lev[:, None, :] + grand[:, None, None]
     df1, df2 = m - 1, (m - 1) * (n - 1)
     ss_err = np.sum(resid ** 2, axis=(1, 2))
-    ms_lev = n * np.sum((lev - grand[:, None]) ** 2, axis=1) / df1
+    ss_lev = n * np.sum((lev - grand[:, None]) ** 2, axis=1)
+    ss_within = np.sum((y - subj[:, :, None]) ** 2, axis=(1, 2))
+    zero = y[0].size * (_RELATIVE_ZERO * np.abs(y).max(axis=(1, 2))) ** 2  # the study's "zero up to rounding"
+    defined = (ss_within > zero) & (ss_err > zero)
+    ms_lev = np.where(ss_lev > zero, ss_lev, 0.0) / df1
     mse = ss_err / df2
-    defined = ss_err > 1e-12 * np.sum((y - grand[:, None, None]) ** 2, axis=(1, 2))  # some error variance
     with np.errstate(divide="ignore", invalid="ignore"):
         F = np.where(defined, ms_lev / mse, np.nan)
     eps = _gg_epsilon(y)
@@ -108,7 +115,9 @@ def rm_analyses(y):
         q = np.where(defined[:, None], np.abs(diff) / np.sqrt(mse / n)[:, None], np.nan)
         d = y[:, :, a] - y[:, :, b]
         sd = d.std(axis=1, ddof=1)
-        t = np.where(sd > 0, d.mean(axis=1) / (sd / np.sqrt(n)), np.nan)
+        pair_max = np.maximum(np.abs(y[:, :, a]).max(axis=1), np.abs(y[:, :, b]).max(axis=1))
+        varies = (n - 1) * sd ** 2 > 2 * n * (_RELATIVE_ZERO * pair_max) ** 2
+        t = np.where(varies, d.mean(axis=1) / (sd / np.sqrt(n)), np.nan)
     p_paired = 2 * stats.t.sf(np.abs(t), n - 1)
     p_holm = _holm(np.nan_to_num(p_paired, nan=1.0))
     p_holm[np.isnan(p_paired)] = np.nan
@@ -126,7 +135,7 @@ def _gg_epsilon(y):
     denom = (m - 1) * np.sum(sdc ** 2, axis=(1, 2))
     tr = np.trace(sdc, axis1=1, axis2=2)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(denom > 0, tr ** 2 / denom, 1.0)
+        return np.where(denom > 0, np.clip(tr ** 2 / denom, 1.0 / (m - 1), 1.0), 1.0)
 
 
 # ------------------------------------------------------------------------------- Gaussian data
