@@ -27,6 +27,7 @@ sources (any edit to them, docstrings included, means new cohorts).
 
 import hashlib
 import json
+import warnings
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -34,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from ..supervision.dubins import TRUE_W_MAX
-from ..supervision.fit import fit_supervisor
+from ..supervision.fit import LibraryEdgeWarning, fit_supervisor
 from ..supervision.reachability import ValueFunction, ValueLibrary, unsafe_set_contains
 from . import cohort as _cohort
 from .design import TREATMENTS, study_design
@@ -48,9 +49,9 @@ MIXES = {
 }
 DESIGN_SEED = 0           # the study notebook's design seed
 FP_COLUMNS = tuple(f"fp_{t}" for t in TREATMENTS)
-_SOURCES = ("study/cohort_power.py", "study/cohort.py", "study/teaming.py", "study/design.py",
-            "supervision/supervisor.py", "supervision/fit.py", "supervision/reachability.py",
-            "supervision/dubins.py")
+# what a simulated cohort depends on: these study modules and the whole chapter 4 package but its views
+_SOURCES = ("study/cohort_power.py", "study/cohort.py", "study/teaming.py", "study/design.py", "supervision/*.py")
+_NOT_SOURCES = ("supervision/explore.py",)
 
 
 @dataclass(frozen=True)
@@ -115,8 +116,9 @@ def code_version():
     from .. import __version__
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256(f"{__version__} numpy {np.__version__} scipy {scipy.__version__} pandas {pd.__version__}".encode())
-    for rel in _SOURCES:
-        h.update((root / rel).read_bytes())
+    files = sorted({p for pattern in _SOURCES for p in root.glob(pattern)} - {root / p for p in _NOT_SOURCES})
+    for path in files:
+        h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
     return h.hexdigest()[:20]
 
 
@@ -134,7 +136,9 @@ def _phase2(library, standard, sup, n_scenes, rng):
     table = _cohort.phase2_interventions(sup, n_scenes, rng)
     states = table[["x", "y", "theta"]].to_numpy()
     try:
-        fit = fit_supervisor(library, states, prior="mle")
+        with warnings.catch_warnings():  # fits at the library's edge are common with noisy recruits: the
+            warnings.simplefilter("ignore", LibraryEdgeWarning)  # table records every w_max_hat instead
+            fit = fit_supervisor(library, states, prior="mle")
     except ValueError as err:  # too few interventions, or zero variance: nothing to fit
         return None, {"n_interventions": len(states), "excluded": True, "reason": f"no fit: {err}"[:80]}
     excluded = not unsafe_set_contains(fit.value_fn, standard, level=fit.mu)
