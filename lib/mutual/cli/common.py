@@ -88,7 +88,7 @@ def numeric_column(frame, column, path):
         row = int(bad.argmax())
         line = int(frame.index[row]) + 2     # read_csv numbers data rows from 0; line 1 is the header
         raw = frame[column].iloc[row]
-        what = "missing (empty or NA)" if pd.isna(raw) else f"{raw!r} is not a finite number"
+        what = "missing (empty or NA)" if pd.isna(raw) else f"{_shown(raw)} is not a finite number"
         raise InputError(f"{path}: column {column!r}, line {line}: {what}")
     return values
 
@@ -106,7 +106,7 @@ def integer_column(frame, column, path, allow_empty=False):
     bad &= ~empty if allow_empty else np.ones_like(bad)
     if bad.any():
         row = int(bad.argmax())
-        what = "empty" if empty[row] else f"{raw.iloc[row]!r} is not a whole number"
+        what = "empty" if empty[row] else f"{_shown(raw.iloc[row])} is not a whole number"
         raise InputError(f"{path}: column {column!r}, line {int(frame.index[row]) + 2}: {what}")
 
 
@@ -203,6 +203,13 @@ def run(args, prog):
 def _fail(prog, message, status):
     print(f"{prog}: error: {message}", file=sys.stderr)
     return status
+
+
+def _shown(value):
+    """A cell's value as the user wrote it: numbers plainly, text quoted."""
+    if hasattr(value, "item"):
+        value = value.item()
+    return repr(value) if isinstance(value, str) else f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _first_line(err):

@@ -129,6 +129,12 @@ def run_infer(args):
     for column in ("demo", "t", "state"):
         common.integer_column(frame, column, demos_path)
     common.integer_column(frame, "action", demos_path, allow_empty=True)
+    last = frame["t"] == frame.groupby("demo")["t"].transform("max")
+    gap = frame["action"].isna() & ~last
+    if gap.any():
+        row = int(gap.to_numpy().argmax())
+        raise common.InputError(f"{demos_path}: column 'action', line {row + 2}: empty, but only each "
+                                "demonstration's last row (largest t) may have no action")
     with common.about(demos_path):
         demos = load_demonstrations(demos_path, mdp)
         cand = constraint_candidates(mdp, demos)
@@ -175,15 +181,20 @@ def _figure(grid, cand, result):
     chosen_states = [cand.index[k] for k in result.chosen if states[k]]
     chosen_actions = [cand.index[k] for k in result.chosen if actions[k]]
     fig, (ax_s, ax_a) = plt.subplots(1, 2, figsize=(6.6, 3.4), gridspec_kw={"width_ratios": [3, 1.4]})
-    im = plot_states(ax_s, grid, F[states], crosses=chosen_states,
-                     title=f"states: F in round 1; X = chosen ({len(result.chosen)} constraints)")
+    im = plot_states(ax_s, grid, F[states], crosses=chosen_states, title="states: F in round 1; X: chosen")
     for i, k in enumerate(result.chosen, start=1):
         if states[k]:
             c, r = grid.coords(cand.index[k])
             ax_s.text(c + 0.28, r + 0.28, str(i), color="white", fontsize=7, fontweight="bold")
     plot_actions(ax_a, F[actions], crosses=chosen_actions, title="actions: F in round 1")
     fig.colorbar(im, ax=[ax_s, ax_a], shrink=0.8, label="F = Z_C+/Z_C0 (grey: infeasible)")
+    order = "; ".join(f"{i}: {grid.label(cand.kind[k], cand.index[k])}" for i, k in enumerate(result.chosen, 1))
+    fig.text(0.02, -0.02, f"chosen, by round: {order or 'none'}", fontsize=7, ha="left", va="top", wrap=True)
     return fig
+
+
+def _missing(value):
+    return value is None or value != value
 
 
 def _summary(r, args):
@@ -195,7 +206,7 @@ def _summary(r, args):
         lines.append(head)
         lines.append(f"  {'rank':>4}  {'candidate':<18}{'psi*':>7}{'F':>9}{'-log F':>9}{'exact gain':>12}")
         for row in ranking:
-            psi = "" if row["psi"] is None else f"{row['psi']:.3f}"
+            psi = "" if _missing(row["psi"]) else f"{row['psi']:.3f}"
             mark = "  <- chosen" if row["chosen"] else ""
             lines.append(f"  {row['rank']:>4}  {row['label']:<18}{psi:>7}{row['F']:>9.4f}{row['neg_log_F']:>9.4f}"
                          f"{row['exact_gain']:>12.4f}{mark}")
@@ -206,7 +217,7 @@ def _summary(r, args):
            "no candidate left": "no feasible candidate left"}[r["stopped"]]
     lines.append(f"Stopped: {why}. Chosen constraints ({len(r['chosen'])}):")
     for row in r["chosen"]:
-        psi = "" if row["psi"] is None else f", psi* = {row['psi']:.3f}"
+        psi = "" if _missing(row["psi"]) else f", psi* = {row['psi']:.3f}"
         lines.append(f"  round {row['round']}: {row['label']}{psi}, F = {row['F']:.4f}, "
                      f"exact gain {row['exact_gain']:.4f} nats/demo")
     lines += ["", "F: Z_C+/Z_C0 (Algorithm 4); exact gain: per-demonstration increase of the log-likelihood.",

@@ -122,7 +122,15 @@ def run_anova(args):
     path = common.existing_file(args.data)
     frame = common.read_csv(path)
     data = _select(frame, args, path)
-    levels = [s.strip() for s in args.levels.split(",") if s.strip()] if args.levels else None
+    levels = None
+    if args.levels:
+        levels = [s.strip() for s in args.levels.split(",") if s.strip()]
+        present = sorted(set(data[args.within]))
+        absent = [level for level in levels if level not in present]
+        if absent:
+            raise common.InputError(f"{path}: --levels: no row has {args.within} = {absent[0]!r} "
+                                    f"(column {args.within!r} holds {present[:12]})")
+        data = data[data[args.within].isin(levels)]
     with common.about(path):
         anova, pairwise, results = analyse(data, args.dv, args.within, args.subject, args.aggregate, levels)
     results = {"command": "study anova", "input": str(path), "where": dict(_filters(args.where)), **results}

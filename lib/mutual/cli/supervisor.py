@@ -120,7 +120,10 @@ def run_fit(args):
     common.integer_column(frame, "trial", path)
     for column in ("time", "x", "y", "theta", "obstacle_x", "obstacle_y"):
         if column in frame:
-            common.numeric_column(frame, column, path)
+            values = common.numeric_column(frame, column, path)
+            if column == "time" and (values < 0).any():
+                raise common.InputError(f"{path}: column 'time', line {int((values < 0).argmax()) + 2}: "
+                                        f"{values[(values < 0).argmax()]:g} is negative (seconds since the trial began)")
     with common.about(path):
         validate_interventions(frame)        # every column, every row, before any solve
     groups = _groups(frame, args, path)
