@@ -7,6 +7,8 @@ participant's interventions by maximum likelihood or MAP (eqs. 4.8-4.12, Sec. 4.
 avoidance level ``alpha = mu + k sigma`` of Sec. 4.5.
 """
 
+import warnings
+
 from . import common
 
 #: ``--grid`` presets: name -> (half width, (nx, ny, ntheta), build time of the default library on 2 CPU cores)
@@ -102,6 +104,16 @@ def _groups(frame, args, path):
     return groups
 
 
+def _at_edge(fit):
+    """Whether the fit is the slowest or most agile member searched (the supervisor may lie beyond)."""
+    import numpy as np
+    boundary = getattr(fit, "boundary", "unknown")
+    if boundary != "unknown":
+        return boundary is not None
+    searched = np.flatnonzero(fit.admissible)
+    return bool(fit.index in (searched.min(), searched.max()))
+
+
 def run_fit(args):
     import numpy as np
     import pandas as pd
@@ -136,13 +148,13 @@ def run_fit(args):
                                 progress=not args.no_progress)
     rows, fits = [], {}
     for who, states in groups.items():
-        with common.about(f"{path} (participant {who})"):
+        with common.about(f"{path} (participant {who})"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")          # an edge of the library is reported in the table instead
             fit = fit_supervisor(library, states, prior=args.prior)
         fits[who] = (fit, states)
-        edge = fit.index in (0, len(library) - 1)
         rows.append({"participant": who, "n": fit.n, "w_max": fit.w_max, "mu": fit.mu, "sigma": fit.sigma,
                      "k": args.level, "alpha": fit.level(args.level), "coverage": fit.coverage(states, args.level),
-                     "loglik": fit.loglik, "prior": args.prior, "at_library_edge": bool(edge)})
+                     "loglik": fit.loglik, "prior": args.prior, "at_library_edge": _at_edge(fit)})
     table = pd.DataFrame(rows)
     outputs = {"table": common.write_csv(table, common.output_path(args, "supervisor_fit.csv"), float_format="%.6g"),
                "figure": common.save_figure(_figure(fits, args), common.output_path(args, "supervisor_fit.png"))}
@@ -196,7 +208,7 @@ def _summary(r):
     lines += ["", "  alpha = mu + k sigma: the level at which the robot should start avoiding (Sec. 4.5);",
               "  covered: share of the participant's interventions at or below alpha."]
     if any(f["at_library_edge"] for f in r["fits"]):
-        lines.append("  *: the fit is the library's smallest or largest w_max; the supervisor may lie beyond it "
-                     "(widen --w-max).")
+        lines.append("  *: the fit is the slowest or most agile member searched (with --prior map the most agile is "
+                     "the true robot's w_max = 1); the supervisor may lie beyond it (widen --w-max).")
     lines += ["", "wrote " + ", ".join(r["outputs"].values())]
     return "\n".join(lines)
