@@ -4,7 +4,8 @@
 one-way repeated-measures ANOVA of section 5.3.1 (:func:`mutual.study.rm_anova`) with the
 Greenhouse-Geisser sphericity correction, all-pairs Tukey HSD with the repeated-measures error
 term (:func:`mutual.study.tukey_rm`) and paired t-tests with Holm's correction
-(:func:`mutual.study.paired_t_holm`), on whatever level names the ``--within`` column holds.
+(:func:`mutual.study.paired_t_holm`; both in :func:`mutual.study.pairwise_comparisons`), on whatever
+level names the ``--within`` column holds.
 """
 
 import importlib
@@ -48,7 +49,9 @@ def register(subparsers):
                                 description=DESCRIPTION, epilog=EXAMPLE,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     anova.add_argument("data", metavar="DATA.csv", help="a CSV table with a header row")
-    anova.add_argument("--dv", required=True, metavar="COL", help="the numeric column to analyse")
+    anova.add_argument("--dv", required=True, metavar="COL",
+                       help="the numeric column to analyse; in a tidy trial table (columns measure, value) "
+                            "also a measure name, e.g. --dv false_positives")
     anova.add_argument("--within", required=True, metavar="COL",
                        help="the column naming each row's level (treatment/condition); any names")
     anova.add_argument("--subject", required=True, metavar="COL", help="the column naming each row's subject")
@@ -78,6 +81,10 @@ def _filters(where):
 def _select(frame, args, path):
     """The rows and columns to analyse, with the file, column and line named on bad input."""
     filters = _filters(args.where)
+    if args.dv not in frame.columns and {"measure", "value"} <= set(frame.columns) \
+            and (frame["measure"].astype(str) == args.dv).any():
+        # a tidy trial table: --dv names a measure, analysed in the column 'value'
+        frame = frame[frame["measure"].astype(str) == args.dv].rename(columns={"value": args.dv})
     common.require_columns(frame, [args.dv, args.within, args.subject] + [c for c, _ in filters], path)
     for column, value in filters:
         keep = frame[column].astype(str) == value
@@ -99,22 +106,19 @@ def _stem(args):
 
 
 def analyse(data, dv, within, subject, aggregate=None, levels=None):
-    """The ANOVA, Tukey and Holm tables of ``data`` as one results dict (the ``--json`` object)."""
-    from ..study import paired_t_holm, rm_anova, tukey_rm
-    anova = rm_anova(data, dv, subject, within, aggregate=aggregate, levels=levels)
-    tukey = tukey_rm(anova)
-    holm = paired_t_holm(anova.cells)
-    pairwise = tukey.rename(columns={"p": "p_tukey"}).merge(
-        holm.rename(columns={"t": "t", "df": "df_t", "p": "p_t"}), on=["A", "B"])
+    """The ANOVA and the pairwise table of ``data`` as one results dict (the ``--json`` object)."""
+    from ..study import pairwise_comparisons, rm_anova
+    anova = rm_anova(data, dv=dv, within=within, subject=subject, aggregate=aggregate, levels=levels)
+    pairwise = pairwise_comparisons(anova)
     se = anova.cells.std(ddof=1) / len(anova.cells) ** 0.5
     return anova, pairwise, {
         "dv": dv, "within": within, "subject": subject, "aggregate": aggregate,
-        "n_subjects": anova.n_subjects, "levels": list(anova.levels),
+        "n_subjects": anova.n_subjects, "levels": [str(level) for level in anova.levels],
         "means": {str(k): float(v) for k, v in anova.means.items()},
         "se": {str(k): float(v) for k, v in se.items()},
-        "F": anova.F, "df1": anova.df_num, "df2": anova.df_den, "p": anova.p,
-        "eps": anova.epsilon_gg, "p_gg": anova.p_gg, "mse": anova.mse,
-        "pairwise": pairwise.to_dict(orient="records"),
+        "F": anova.F, "df1": anova.df1, "df2": anova.df2, "p": anova.p,
+        "eps": anova.eps, "p_gg": anova.p_gg, "mse": anova.mse,
+        "pairwise": pairwise_comparisons(anova, as_records=True),
     }
 
 
@@ -153,14 +157,19 @@ def run_anova(args):
 def _figure(anova, pairwise, args):
     common.use_agg()
     import matplotlib.pyplot as plt
-    from ..study.stats import plot_condition_means
+    from ..study.plots import plot_condition_means
     fig, ax = plt.subplots(figsize=(1.6 + 1.1 * len(anova.levels), 3.4))
     plot_condition_means(ax, anova, pairwise.rename(columns={"p_tukey": "p"}))
+    low = float(anova.cells.to_numpy().min())
+    if low < 0:                                   # the bars start at 0; show negative values too
+        top = ax.get_ylim()[1]
+        ax.set_ylim(low - 0.05 * (top - low), top)
     selected = ", ".join(v for _, v in _filters(args.where))
     ax.set_xlabel(args.within)
     ax.set_ylabel((f"{selected} ({args.dv})" if selected else args.dv)
                   + ("\nmean per subject and level" if args.aggregate else ""))
-    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects}); brackets: Tukey HSD p", fontsize=8)
+    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects}); grey: subjects; brackets: Tukey HSD p",
+                 fontsize=8)
     return fig
 
 
