@@ -136,7 +136,10 @@ def run_anova(args):
                                     f"(column {args.within!r} holds {present[:12]})")
         data = data[data[args.within].isin(levels)]
     with common.about(path):
-        anova, pairwise, results = analyse(data, args.dv, args.within, args.subject, args.aggregate, levels)
+        try:
+            anova, pairwise, results = analyse(data, args.dv, args.within, args.subject, args.aggregate, levels)
+        except ValueError as err:      # speak the command line's words, not the library's
+            raise type(err)(str(err).replace("aggregate='mean'", "--aggregate mean")) from None
     results = {"command": "study anova", "input": str(path), "where": dict(_filters(args.where)), **results}
 
     import pandas as pd
