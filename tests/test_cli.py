@@ -171,7 +171,7 @@ def test_motion_legible_on_a_malformed_spec(tmp_path):
 
 def test_supervisor_fit_recovers_a_fresh_simulated_supervisor(tmp_path):
     from mutual.supervision import NoisySupervisor, value_library, write_interventions
-    from mutual.supervision.reachability import QUICK_GRID
+    from mutual.supervision import QUICK_GRID
     from mutual.supervision.supervisor import approach_scenes
     library = value_library([0.5, 1.0, 2.0], 1.0, QUICK_GRID, progress=False)
     rng = np.random.default_rng(5)
@@ -201,9 +201,21 @@ def test_supervisor_fit_on_the_example(tmp_path):
     assert (table["mu"] >= 0).all()          # MAP: mu* = max(mu*, 0)
 
 
+def test_supervisor_fit_closed_form_recovers_the_example_supervisors(tmp_path):
+    """The example's three simulated supervisors (generated on the HJ full grid) have w_max 1, 0.75, 0.5
+    and mu 0.3, 0.2, 0.5; the exact closed-form library finds them in about a second."""
+    run = mutual("supervisor", "fit", EXAMPLES / "interventions.csv", "--method", "closed-form", "--json",
+                 "--no-progress", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    fits = {f["participant"]: f for f in json.loads(run.stdout)["fits"]}
+    assert [fits[p]["w_max"] for p in ("sim-01", "sim-02", "sim-03")] == [1.0, 0.75, 0.5]
+    for p, mu in (("sim-01", 0.3), ("sim-02", 0.2), ("sim-03", 0.5)):
+        assert fits[p]["mu"] == pytest.approx(mu, abs=0.05)
+
+
 def test_supervisor_fit_on_a_malformed_file(tmp_path):
     run = mutual("supervisor", "fit", MALFORMED / "interventions_bad_theta.csv", "--grid", "quick", cwd=tmp_path)
-    assert_one_line_error(run, "interventions_bad_theta.csv", "column 'theta'", "line 5", "'left'")
+    assert_one_line_error(run, "interventions_bad_theta.csv", "column 'theta'", "line 5 of the file", "'left'")
 
 
 # ---- mutual constraints infer ---------------------------------------------------------------------

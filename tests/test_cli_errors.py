@@ -83,7 +83,7 @@ CASES = [
     ({"i.csv": INTERVENTIONS.replace("sim-03,", ",", 1)}, ["supervisor", "fit", "i.csv"],
      ["i.csv", "column 'participant'", "empty"]),
     ({"i.csv": INTERVENTIONS + "sim-04,1,-2,1,1,0,0,0\n"}, ["supervisor", "fit", "i.csv"],
-     ["i.csv", "column 'time', line 92", "negative"]),
+     ["i.csv", "line 92", "column 'time'", "negative"]),
     ({"i.csv": INTERVENTIONS + "sim-04,1,2,1,1,0,0,0,9\n"}, ["supervisor", "fit", "i.csv"], ["i.csv"]),
     ({"i.csv": INTERVENTIONS}, ["supervisor", "fit", "i.csv", "--participant", "nobody"],
      ["i.csv", "no intervention of participant 'nobody'"]),

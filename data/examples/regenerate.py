@@ -34,7 +34,7 @@ def interventions():
     drive straight at a unit-radius obstacle from 7.5 away (the Phase II scenes of Sec. 5.2.1), on
     the full grid (the default of `mutual supervisor fit`)."""
     from mutual.supervision import NoisySupervisor, value_library, write_interventions
-    from mutual.supervision.reachability import FULL_GRID
+    from mutual.supervision import FULL_GRID
     from mutual.supervision.supervisor import approach_scenes
     supervisors = {"sim-01": (1.0, 0.3, 0.05), "sim-02": (0.75, 0.2, 0.05), "sim-03": (0.5, 0.5, 0.1)}
     library = value_library(0.25 * np.arange(1, 13), 1.0, FULL_GRID)

@@ -30,12 +30,14 @@ mu >= 0 and only members at least as cautious as the true robot (w_max = 1, Sec.
 The robot should avoid the supervisor's interventions at the level alpha = mu + k sigma, k = --level
 (Sec. 4.5; k = 2 keeps clear of about 97.7% of interventions in expectation).
 
-The value functions are computed once with hj-reachability and cached on disk
-($MUTUAL_CACHE_DIR, else ~/.cache/mutual); later runs load them in about a second.
---grid quick: {GRIDS['quick'][1][0]} x {GRIDS['quick'][1][1]} x {GRIDS['quick'][1][2]} nodes, {GRIDS['quick'][2]} to build the default library the
-              first time (coarse: for trying it out).
---grid full:  {GRIDS['full'][1][0]} x {GRIDS['full'][1][1]} x {GRIDS['full'][1][2]} nodes (the chapter 4 notebook's grid, the default), {GRIDS['full'][2]}
-              the first time.
+How long it takes: the value functions are computed once with hj-reachability (--method hj, the
+thesis's method, the default) and cached on disk ($MUTUAL_CACHE_DIR, else ~/.cache/mutual); later
+runs load them in about a second. Measured on 2 CPU cores for the default library of 12 members:
+--grid quick: {GRIDS['quick'][1][0]} x {GRIDS['quick'][1][1]} x {GRIDS['quick'][1][2]} nodes, {GRIDS['quick'][2]} the first time (coarse: for trying it out).
+--grid full:  {GRIDS['full'][1][0]} x {GRIDS['full'][1][1]} x {GRIDS['full'][1][2]} nodes (the chapter 4 notebook's grid; the default), {GRIDS['full'][2]} the first time.
+--method closed-form: the exact avoid values of the undisturbed car at the grid's nodes instead of
+              the HJ solve: about a second on either grid, nothing cached (for trying it out; the
+              chapter 4 notebook compares the HJ values with it).
 Both grids cover |x|, |y| <= 8 around the obstacle centre (in the units of x and y); every
 intervention must lie inside.
 
@@ -62,6 +64,9 @@ def register(subparsers):
     fit.add_argument("--grid", choices=sorted(GRIDS), default="full",
                      help=f"value-function grid: quick ({GRIDS['quick'][2]} the first time) or full "
                           f"(default; {GRIDS['full'][2]} the first time); cached afterwards")
+    fit.add_argument("--method", choices=["hj", "closed-form"], default="hj",
+                     help="hj: Hamilton-Jacobi reachability (the thesis's method, default); closed-form: the exact "
+                          "values of the undisturbed car, about a second, for trying it out")
     fit.add_argument("--prior", choices=["mle", "map"], default="mle",
                      help="mle: maximum likelihood (eq. 4.12); map: conservative prior of Sec. 4.4 (default: mle)")
     fit.add_argument("--level", type=float, default=2.0, metavar="K",
@@ -117,27 +122,14 @@ def _at_edge(fit):
 def run_fit(args):
     import numpy as np
     import pandas as pd
-    from ..supervision.supervisor import validate_interventions
+    from ..supervision import read_interventions
     path = common.existing_file(args.interventions)
     if args.pool and args.participant is not None:
         raise common.InputError("--pool and --participant exclude each other")
     if not np.isfinite(args.level):
         raise common.InputError(f"--level {args.level}: must be a finite number")
-    frame = common.read_csv(path)
-    common.require_columns(frame, ("participant", "trial", "time", "x", "y", "theta"), path)
-    for column in ("participant",):
-        empty = frame[column].isna() | (frame[column].astype(str).str.strip() == "")
-        if empty.any():
-            raise common.InputError(f"{path}: column {column!r}, line {int(empty.to_numpy().argmax()) + 2}: empty")
-    common.integer_column(frame, "trial", path)
-    for column in ("time", "x", "y", "theta", "obstacle_x", "obstacle_y"):
-        if column in frame:
-            values = common.numeric_column(frame, column, path)
-            if column == "time" and (values < 0).any():
-                raise common.InputError(f"{path}: column 'time', line {int((values < 0).argmax()) + 2}: "
-                                        f"{values[(values < 0).argmax()]:g} is negative (seconds since the trial began)")
     with common.about(path):
-        validate_interventions(frame)        # every column, every row, before any solve
+        frame = read_interventions(path)    # every column, every row, before any solve; names file, line, column
     groups = _groups(frame, args, path)
     w_maxes = _w_maxes(args.w_max)
 
@@ -145,7 +137,7 @@ def run_fit(args):
     half_width, shape, _ = GRIDS[args.grid]
     with common.about("--w-max/--radius/--speed"):
         library = value_library(w_maxes, args.radius, grid_spec=GridSpec(half_width, shape), speed=args.speed,
-                                progress=not args.no_progress)
+                                progress=not args.no_progress, method=args.method)
     rows, fits = [], {}
     for who, states in groups.items():
         with common.about(f"{path} (participant {who})"), warnings.catch_warnings():
@@ -159,6 +151,7 @@ def run_fit(args):
     outputs = {"table": common.write_csv(table, common.output_path(args, "supervisor_fit.csv"), float_format="%.6g"),
                "figure": common.save_figure(_figure(fits, args), common.output_path(args, "supervisor_fit.png"))}
     results = {"command": "supervisor fit", "input": str(path), "grid": args.grid, "grid_shape": list(shape),
+               "method": args.method,
                "library_w_max": w_maxes, "radius": args.radius, "speed": args.speed, "prior": args.prior,
                "level_k": args.level, "fits": rows, "outputs": {k: str(v) for k, v in outputs.items()}}
     common.report(args, _summary(results), results)
@@ -197,7 +190,7 @@ def _figure(fits, args):
 
 
 def _summary(r):
-    lines = [f"Supervisor safe sets from {r['input']} ({r['prior'].upper()}, {r['grid']} grid, "
+    lines = [f"Supervisor safe sets from {r['input']} ({r['prior'].upper()}, {r['method']} values on the {r['grid']} grid, "
              f"library w_max = {', '.join(f'{w:g}' for w in r['library_w_max'])} rad/s)", ""]
     k = r["level_k"]
     lines.append(f"  {'participant':<14}{'n':>5}{'w_max':>8}{'mu':>9}{'sigma':>9}{f'alpha (k={k:g})':>15}"
