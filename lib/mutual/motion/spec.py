@@ -6,8 +6,8 @@ The hypotheses are reaching tasks, eq. (6.17) discretised with ``N = steps`` ste
 goal (H1) and ``g_0`` each distractor (H0). The legible motion minimises
 ``(1 + alpha) J_1 - J_0`` (eq. 6.15; Theorem 6.4.2 makes it the minimiser of the likelihood
 ratio); with several distractors ``J_0`` is their mean, the equal-weight case of the Lagrangian
-of section 6.5. Alternatives: ``eta`` solves the multi-distractor QP of section 6.5,
-``min J_1 s.t. J_1 - J_0i <= eta`` (:func:`mutual.motion.qp.multi_distractor_qp`), and an
+of section 6.5 (:func:`mutual.motion.legibility.distractor_mixture`). Alternatives: ``eta``
+solves the multi-distractor QP of section 6.5, ``min J_1 s.t. J_1 - J_0i <= eta`` (:func:`mutual.motion.qp.multi_distractor_qp`), and an
 ``[anticipation]`` table replans with ``alpha`` rising linearly over the horizon (eq. 6.16).
 
 ``dynamics = "single-integrator"`` (``x' = u`` in the plane, eq. 6.5) is solved exactly by LQR;
@@ -186,13 +186,6 @@ def _costs(spec):
     return J1, J0s
 
 
-def _mean(costs):
-    total = costs[0]
-    for c in costs[1:]:
-        total = total + c
-    return (1.0 / len(costs)) * total
-
-
 def solve_legible(spec):
     """The legible and the predictable (H1-optimal) motion of ``spec``.
 
@@ -218,10 +211,11 @@ def solve_legible(spec):
         out["duals"] = duals
     elif spec.method == "receding-horizon":
         lo, hi, every = spec.anticipation
-        xs, us, alphas = leg.receding_horizon(dyn, J1, _mean(J0s), x0, N, leg.linear_alpha_schedule(lo, hi), every)
+        xs, us, alphas = leg.receding_horizon(dyn, J1, leg.distractor_mixture(J0s), x0, N,
+                                              leg.linear_alpha_schedule(lo, hi), every)
         out["alphas"] = alphas
     else:
-        sol = leg.legible_trajectory(dyn, J1, _mean(J0s), x0, N, spec.alpha)
+        sol = leg.legible_trajectory(dyn, J1, J0s, x0, N, spec.alpha)     # J0: the distractors' mean
         xs, us = sol.xs, sol.us
         out["alphas"] = np.full(N, spec.alpha)
     plain = leg.solve(dyn, J1, x0, N)
