@@ -16,6 +16,12 @@ GRIDS = {
     "quick": (8.0, (41, 41, 24), "about 10 s"),
     "full": (8.0, (101, 101, 64), "about 3 minutes"),
 }
+
+
+def _nodes(name):
+    return " x ".join(str(n) for n in GRIDS[name][1]) + " nodes"
+
+
 DEFAULT_W_MAXES = tuple(0.25 * k for k in range(1, 13))   # 0.25 ... 3.0 rad/s, the library of Fig. 4.2
 
 DESCRIPTION = f"""\
@@ -33,8 +39,9 @@ The robot should avoid the supervisor's interventions at the level alpha = mu + 
 How long it takes: the value functions are computed once with hj-reachability (--method hj, the
 thesis's method, the default) and cached on disk ($MUTUAL_CACHE_DIR, else ~/.cache/mutual); later
 runs load them in about a second. Measured on 2 CPU cores for the default library of 12 members:
---grid quick: {GRIDS['quick'][1][0]} x {GRIDS['quick'][1][1]} x {GRIDS['quick'][1][2]} nodes, {GRIDS['quick'][2]} the first time (coarse: for trying it out).
---grid full:  {GRIDS['full'][1][0]} x {GRIDS['full'][1][1]} x {GRIDS['full'][1][2]} nodes (the chapter 4 notebook's grid; the default), {GRIDS['full'][2]} the first time.
+--grid quick: {_nodes('quick')}, {GRIDS['quick'][2]} the first time (coarse: for trying it out).
+--grid full:  {_nodes('full')} (the chapter 4 notebook's grid; the default),
+              {GRIDS['full'][2]} the first time.
 --method closed-form: the exact avoid values of the undisturbed car at the grid's nodes instead of
               the HJ solve: about a second on either grid, nothing cached (for trying it out; the
               chapter 4 notebook compares the HJ values with it).
@@ -190,7 +197,8 @@ def _figure(fits, args):
 
 
 def _summary(r):
-    lines = [f"Supervisor safe sets from {r['input']} ({r['prior'].upper()}, {r['method']} values on the {r['grid']} grid, "
+    lines = [f"Supervisor safe sets from {r['input']} ({r['prior'].upper()}, {r['method']} values on the "
+             f"{r['grid']} grid, "
              f"library w_max = {', '.join(f'{w:g}' for w in r['library_w_max'])} rad/s)", ""]
     k = r["level_k"]
     lines.append(f"  {'participant':<14}{'n':>5}{'w_max':>8}{'mu':>9}{'sigma':>9}{f'alpha (k={k:g})':>15}"

@@ -8,7 +8,8 @@ goal (H1) and ``g_0`` each distractor (H0). The legible motion minimises
 ratio); with several distractors ``J_0`` is their mean, the equal-weight case of the Lagrangian
 of section 6.5 (:func:`mutual.motion.legibility.distractor_mixture`). Alternatives: ``eta``
 solves the multi-distractor QP of section 6.5, ``min J_1 s.t. J_1 - J_0i <= eta``
-(:func:`mutual.motion.qp.multi_distractor_qp`), and an ``[anticipation]`` table replans with ``alpha`` rising linearly over the horizon (eq. 6.16).
+(:func:`mutual.motion.qp.multi_distractor_qp`), and an ``[anticipation]`` table replans with
+``alpha`` rising linearly over the horizon (eq. 6.16).
 
 ``dynamics = "single-integrator"`` (``x' = u`` in the plane, eq. 6.5) is solved exactly by LQR;
 ``"dubins"`` (the car of eq. 7.5, state ``(x, y, theta)``, constant speed, turn rate ``u``) by
