@@ -14,11 +14,7 @@ import pytest
 from scipy import stats
 
 from mutual.cli import main
-from mutual.constraints.world import LOITER_OPTION
 
-# the thesis's gridworld rule (loiter at the goal only) comes with the constraints engineer's
-# gridworld(loiter=...); until it has landed, the tests that build such a world are skipped
-needs_loiter = pytest.mark.skipif(not LOITER_OPTION, reason="mutual.constraints.gridworld has no loiter option yet")
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "data" / "examples"
@@ -228,7 +224,6 @@ def test_supervisor_fit_on_a_malformed_file(tmp_path):
 WORLD = """width = 5\nheight = 4\nstart = [0, 0]\ngoal = [4, 0]\nslip = 0.05\nhorizon = 10\nloiter = "goal"\n"""
 
 
-@needs_loiter
 def test_constraints_infer_finds_a_fresh_ground_truth_constraint(tmp_path):
     from mutual.constraints import constraint_mask, sample_demonstrations, write_demonstrations
     from mutual.constraints.world import world_from_mapping
@@ -251,7 +246,6 @@ def test_constraints_infer_finds_a_fresh_ground_truth_constraint(tmp_path):
     assert no_temporaries(tmp_path)
 
 
-@needs_loiter
 def test_constraints_infer_on_the_example(tmp_path):
     run = mutual("constraints", "infer", EXAMPLES / "demonstrations.csv", "--world", EXAMPLES / "world.toml",
                  "--no-progress", cwd=tmp_path)
@@ -262,8 +256,8 @@ def test_constraints_infer_on_the_example(tmp_path):
 
 
 @pytest.mark.parametrize("demos, world, phrases", [
-    pytest.param("demonstrations_bad_action.csv", EXAMPLES / "world.toml",
-                 ["demonstrations_bad_action.csv", "column 'action'", "line 3", "'north'"], marks=needs_loiter),
+    ("demonstrations_bad_action.csv", EXAMPLES / "world.toml",
+     ["demonstrations_bad_action.csv", "column 'action'", "line 3", "'north'"]),
     (EXAMPLES / "demonstrations.csv", "world_bad_slip.toml", ["world_bad_slip.toml", "key 'slip'", "[0, 1]"]),
 ])
 def test_constraints_infer_on_malformed_files(demos, world, phrases, tmp_path):
@@ -273,7 +267,6 @@ def test_constraints_infer_on_malformed_files(demos, world, phrases, tmp_path):
 
 # ---- the README's "Your own data" section ----------------------------------------------------------
 
-@needs_loiter
 def test_the_readme_python_snippets_run_on_the_examples(tmp_path):
     """Each task's three lines of Python in the README run as written on the example inputs."""
     text = (ROOT / "README.md").read_text()

@@ -7,7 +7,6 @@ from pathlib import Path
 import pytest
 
 from mutual.cli import main
-from mutual.constraints.world import LOITER_OPTION
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "data" / "examples"
 STUDY = "who,cond,y\ns1,a,1\ns1,b,2\ns2,a,2\ns2,b,4\ns3,a,3\ns3,b,3.5\n"
@@ -96,14 +95,8 @@ CASES = [
 ]
 
 
-# cases that read the demonstrations need a world with the thesis's loiter rule (the constraints
-# engineer's gridworld(loiter=...)); skipped until it has landed
-_LOITER = pytest.mark.skipif(not LOITER_OPTION, reason="mutual.constraints.gridworld has no loiter option yet")
-
-
-@pytest.mark.parametrize("files, argv, phrases", [
-    pytest.param(*case, id=" ".join(case[1][:2]) + f" #{i}", marks=[_LOITER] if case[2][0] == "demos.csv" else [])
-    for i, case in enumerate(CASES)])
+@pytest.mark.parametrize("files, argv, phrases", CASES, ids=[" ".join(c[1][:2]) + f" #{i}" for i, c in
+                                                              enumerate(CASES)])
 def test_bad_input_is_one_line_naming_what_is_wrong(files, argv, phrases, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     for name, content in files.items():

@@ -9,9 +9,8 @@ import pytest
 
 from mutual.constraints import gridworld
 from mutual.constraints.gridworld import GRID_ACTIONS
-from mutual.constraints.world import LOITER_OPTION, load_world, world_from_mapping
+from mutual.constraints.world import load_world, world_from_mapping
 
-needs_loiter = pytest.mark.skipif(not LOITER_OPTION, reason="mutual.constraints.gridworld has no loiter option yet")
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "data" / "examples" / "world.toml"
 BASE = {"width": 4, "height": 3, "start": [0, 0], "goal": [3, 0], "slip": 0.1}
@@ -78,7 +77,6 @@ def test_a_missing_file_is_a_file_not_found_error(tmp_path):
         load_world(tmp_path / "nowhere.toml")
 
 
-@needs_loiter
 def test_the_world_is_the_gridworld_its_keys_describe():
     world = world_from_mapping(world_with(horizon=7, miss_penalty=20.0, loiter="anywhere"))
     same = gridworld(4, 3, (0, 0), (3, 0), slip=0.1, horizon=7, miss_penalty=20.0, loiter="anywhere")
@@ -89,7 +87,6 @@ def test_the_world_is_the_gridworld_its_keys_describe():
     assert world.mdp.terminal_reward.min() == -20.0
 
 
-@needs_loiter
 def test_defaults_are_the_thesis_rules():
     """horizon 2 max(W, H), miss penalty 50, loitering only at the goal (Section 3.3)."""
     world = world_from_mapping(BASE)
@@ -100,7 +97,6 @@ def test_defaults_are_the_thesis_rules():
     assert world_from_mapping(world_with(loiter="anywhere")).mdp.allowed[:, loiter].all()
 
 
-@needs_loiter
 def test_the_example_world_is_the_chapter_3_world():
     text = EXAMPLE.read_text()
     world = load_world(EXAMPLE)

@@ -18,7 +18,6 @@ States are numbered ``col + width * row``; actions follow
 :data:`mutual.constraints.gridworld.GRID_ACTIONS` (E, NE, N, NW, W, SW, S, SE, loiter = 0..8).
 """
 
-import inspect
 import math
 import tomllib
 from pathlib import Path
@@ -26,7 +25,6 @@ from pathlib import Path
 from .gridworld import gridworld
 
 LOITER_RULES = ("goal", "anywhere")
-LOITER_OPTION = "loiter" in inspect.signature(gridworld).parameters
 _KEYS = ("width", "height", "start", "goal", "slip", "horizon", "miss_penalty", "loiter")
 _REQUIRED = ("width", "height", "start", "goal", "slip")
 
@@ -85,11 +83,6 @@ def world_from_mapping(mapping, source="world"):
     loiter = mapping.get("loiter", "goal")
     if loiter not in LOITER_RULES:
         _fail(source, "loiter", f"must be one of {list(LOITER_RULES)}, got {loiter!r}")
-    if not LOITER_OPTION:        # a gridworld from before the loiter rule offered loiter in every cell
-        if loiter != "anywhere":
-            _fail(source, "loiter", f"{loiter!r} needs mutual.constraints.gridworld(loiter=...), which this "
-                                    "version lacks; only \"anywhere\" is available")
-        return gridworld(width, height, start, goal, slip=slip, horizon=horizon, miss_penalty=miss_penalty)
     return gridworld(width, height, start, goal, slip=slip, horizon=horizon, miss_penalty=miss_penalty,
                      loiter=loiter)
 
