@@ -155,25 +155,51 @@ def test_seeds_follow_the_parameters_not_the_order():
     assert cp.CohortSetting(mix="mostly-gradual").words() != cp.CohortSetting().words()
 
 
-def test_command_line_analytic_json(capsys):
+def test_command_line_analytic_json(capsys, tmp_path):
     from mutual.cli import power as cli
     from mutual.study import power as pw
-    assert cli.main(["--analytic-only", "--json"]) == 0
+    assert cli.main(["--analytic-only", "--json", "--out", str(tmp_path)]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["analytic"]["eta2p_bias_corrected"] == pytest.approx(pw.effect_size_from_f(8.72, 2, 20).eta2p_unbiased)
-    assert cli.main(["--analytic-only", "--from-f", "8.72", "2", "21"]) == 2
+    plan = pd.read_csv(tmp_path / "power_plan.csv")
+    assert plan["N for 80%"].tolist() == pw.replication_plan(8.72, 2, 20)["N for 80%"].tolist()
+    assert cli.main(["--analytic-only", "--from-f", "8.72", "2", "21", "--out", str(tmp_path)]) == 2
     assert "is not a one-way repeated-measures design" in capsys.readouterr().err
 
 
 def test_command_line_simulation_json(capsys, tmp_path, monkeypatch):
     from mutual.cli import power as cli
     monkeypatch.setenv("MUTUAL_CACHE_DIR", str(tmp_path))
-    assert cli.main(["--quick", "--inline", "--n", "3:4", "--cohorts", "2", "--json", "--no-progress"]) == 0
+    args = ["--quick", "--inline", "--n", "3:4", "--cohorts", "2", "--json", "--no-progress", "--out", str(tmp_path)]
+    assert cli.main(args) == 0
     doc = json.loads(capsys.readouterr().out)["simulated"]
     assert doc["SIMULATED"] and doc["n"] == [3, 4] and doc["sweep"]["computed"] == 2
     assert {r["test"] for r in doc["power"]} >= set(ps.KEY_TESTS)
-    assert cli.main(["--quick", "--inline", "--n", "3:4", "--cohorts", "2", "--json", "--no-progress"]) == 0
+    assert {p.name for p in tmp_path.glob("power_*")} == {"power_plan.csv", "power_simulated.csv",
+                                                          "power_recommended.csv", "power_curves.png"}
+    assert cli.main(args) == 0
     assert json.loads(capsys.readouterr().out)["simulated"]["sweep"]["cached"] == 2
+    assert cli.main(["--quick", "--inline", "--n", "x", "--out", str(tmp_path)]) == 2
+    assert "--n: 'x' is not an integer" in capsys.readouterr().err
+
+
+def test_mutual_study_power_through_the_command_line(capsys, tmp_path, monkeypatch):
+    """The one-line wiring of the cli's study group: EXTENSIONS = ("power",)."""
+    from mutual import cli
+    from mutual.cli import study
+    monkeypatch.setattr(study, "EXTENSIONS", ("power",))
+    assert cli.main(["study", "power", "--analytic-only", "--json", "--out", str(tmp_path)]) == 0
+    assert json.loads(capsys.readouterr().out)["command"] == "study power"
+
+
+def test_the_command_builds_without_the_numerical_stack():
+    """Wired into `mutual`, `mutual --help` still imports neither numpy nor jax (tests/test_cli.py's rule)."""
+    from mutual.cli import power as cli
+    assert set(cli.MIX_NAMES) == set(cp.MIXES)
+    code = ("import sys, mutual.cli.study as s; s.EXTENSIONS = ('power',); import mutual.cli as c; c.build_parser(); "
+            "print(sorted(m for m in ('jax', 'numpy', 'pandas', 'scipy', 'matplotlib') if m in sys.modules))")
+    probe = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert probe.stdout.strip() == "[]", probe.stdout + probe.stderr
 
 
 @pytest.mark.parametrize("tokens, expected", [(["6:10:2", "11"], [6, 8, 10, 11]), (["5,7"], [5, 7]), (["4:6"], [4, 5, 6])])
