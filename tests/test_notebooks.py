@@ -6,7 +6,7 @@ import nbformat
 import pytest
 
 from mutual.compendium.notebooks import declared_parameters
-from mutual.compendium.paths import NOTEBOOKS
+from mutual.compendium.paths import NOTEBOOKS, results_dir
 
 NOTEBOOK_PATHS = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
 IDS = [p.stem for p in NOTEBOOK_PATHS]
@@ -42,4 +42,5 @@ def test_library_does_the_work(path):
 def test_notebook_runs_quick(stem, executed_notebook):
     results = executed_notebook(stem)
     if not stem.startswith("00_"):
-        assert results, f"{stem} wrote no results for the reproduction report"
+        extensions = results_dir() / "extensions" / f"{stem}.json"   # chapter 8: extensions, not thesis claims
+        assert results or extensions.exists(), f"{stem} wrote no results for the reproduction report"
