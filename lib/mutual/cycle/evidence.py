@@ -20,7 +20,6 @@ import numpy as np
 import pandas as pd
 
 from ..motion.evident_safety import dubins_step
-from ..motion.ilqr import ILQRError, ilqr
 from ..supervision.dubins import SPEED, TRUE_W_MAX
 
 
@@ -136,18 +135,15 @@ ILQR_OPTIONS = {"grad_tol": 1e-6, "max_iter": 500, "second_order": True}
 
 
 def solve_path(task, params, guesses=None):
-    """The lowest-cost iLQR optimum (ILQRResult) of the task's cost with ``params`` over the starts."""
-    best = None
-    for us0 in guesses or turn_guesses(task):
-        try:
-            r = ilqr(*PROBLEM, np.asarray(task.x0, float), us0, params, **ILQR_OPTIONS)
-        except ILQRError:
-            continue
-        if best is None or r.cost < best.cost:
-            best = r
-    if best is None:
-        raise ILQRError("no iLQR start converged for this task")
-    return best
+    """The lowest-cost iLQR optimum of the task's cost with ``params`` over the starting controls
+    (default :func:`turn_guesses`), as an ILQRResult with states (N+1, 3). Solved as the padded problem
+    of :mod:`mutual.cycle.laplace` from stage 0, so paths and the observer's tails share one compiled iLQR."""
+    from dataclasses import replace
+
+    from .laplace import best_tail
+
+    best = best_tail(*PROBLEM, np.asarray(task.x0, float), 0, params, guesses or turn_guesses(task), **ILQR_OPTIONS)
+    return replace(best, xs=best.xs[:, :-1], K=best.K[:, :, :-1])
 
 
 def first_crossing(xs, dt, value, level):

@@ -53,22 +53,32 @@ def _padded(dynamics, running_cost, terminal_cost):
     return dyn, run, term, jax.jit(jax.hessian(shooting))
 
 
+@lru_cache(maxsize=64)
+def _stage_costs(dynamics, running_cost):
+    """A compiled rollout returning the states x_0..x_N and each stage's running cost."""
+
+    def rollout(x0, us, params):
+        def step(x, u):
+            return dynamics(x, u, params), (x, running_cost(x, u, params))
+        last, (xs, costs) = jax.lax.scan(step, x0, us)
+        return jnp.concatenate([xs, last[None]]), costs
+
+    return jax.jit(rollout)
+
+
 def _prefix_costs(dynamics, running_cost, x0, us, params):
     """States x_0..x_N and the running costs of each stage along the controls ``us``."""
-    xs, costs = [np.asarray(x0, float)], []
     with jax.enable_x64(True):
-        for u in us:
-            costs.append(float(running_cost(jnp.asarray(xs[-1]), jnp.asarray(u), params)))
-            xs.append(np.asarray(dynamics(jnp.asarray(xs[-1]), jnp.asarray(u), params), float))
-    return np.array(xs), np.array(costs)
+        xs, costs = _stage_costs(dynamics, running_cost)(jnp.asarray(x0, float), jnp.asarray(us, float), params)
+    return np.asarray(xs), np.asarray(costs)
 
 
-def tail_optimum(dynamics, running_cost, terminal_cost, x, t, steps, params, guesses, **ilqr_options):
-    """The best local optimum of the tail from state ``x`` at stage ``t`` (N = ``steps`` in all) over
-    iLQR runs from the (N, m) control ``guesses`` (only their stages t..N-1 matter). Returns
-    ``(cost J*_tail, log det H_tail, tail controls (N - t, m))``; raises ILQRError if no run converges.
-    ``ilqr_options`` go to :func:`mutual.motion.ilqr.ilqr` (e.g. ``grad_tol``, ``max_iter``)."""
-    dyn, run, term, hessian = _padded(dynamics, running_cost, terminal_cost)
+def best_tail(dynamics, running_cost, terminal_cost, x, t, params, guesses, **ilqr_options):
+    """The lowest-cost iLQR optimum of the tail from state ``x`` at stage ``t`` over runs from the (N, m)
+    control ``guesses`` (their stages before t are ignored), in the padded problem (state (x, clock)).
+    Returns the padded :class:`mutual.motion.ilqr.ILQRResult`; raises ILQRError if no run converges.
+    With ``t = 0`` this solves the whole problem (one compiled iLQR serves paths and tails alike)."""
+    dyn, run, term, _ = _padded(dynamics, running_cost, terminal_cost)
     z0 = np.concatenate([np.asarray(x, float), [0.0]])
     p = {"inner": params, "t0": np.float64(t)}
     best = None
@@ -83,8 +93,19 @@ def tail_optimum(dynamics, running_cost, terminal_cost, x, t, steps, params, gue
             best = result
     if best is None:
         raise ILQRError(f"no iLQR start converged for the tail from stage {t}")
+    return best
+
+
+def tail_optimum(dynamics, running_cost, terminal_cost, x, t, steps, params, guesses, **ilqr_options):
+    """The best local optimum of the tail from state ``x`` at stage ``t`` (N = ``steps`` in all), by
+    :func:`best_tail`, with the log-determinant of the tail's Hessian in its controls. Returns
+    ``(cost J*_tail, log det H_tail, tail controls (N - t, m))``; raises ILQRError if no run converges or
+    the Hessian is not positive definite. ``ilqr_options`` go to :func:`mutual.motion.ilqr.ilqr`."""
+    best = best_tail(dynamics, running_cost, terminal_cost, x, t, params, guesses, **ilqr_options)
+    hessian = _padded(dynamics, running_cost, terminal_cost)[3]
+    z0 = np.concatenate([np.asarray(x, float), [0.0]])
     with jax.enable_x64(True):
-        H = np.asarray(hessian(jnp.asarray(best.us), jnp.asarray(z0), p))
+        H = np.asarray(hessian(jnp.asarray(best.us), jnp.asarray(z0), {"inner": params, "t0": np.float64(t)}))
     H = H.reshape(steps * best.us.shape[1], -1)
     sign, logdet = np.linalg.slogdet(0.5 * (H + H.T))
     if sign <= 0:

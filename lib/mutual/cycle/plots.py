@@ -148,7 +148,8 @@ def act_figure(robots, blind):
            capsize=3)
     bx.set_xticks(np.arange(len(blind)), blind["demonstrations"], fontsize=8)
     bx.set(ylabel="recall of task 2's relevant constraints", ylim=(0, 1.05),
-           title="The blind spot of Fig. 3.3\n(simulated; 95% bootstrap CI over seeds)")
+           title="The blind spot of Fig. 3.3\n(95% bootstrap CI over seeds)")
+    fig.suptitle("Acting on learned constraints (simulated human and world)", fontsize=10)
     return fig
 
 
@@ -179,6 +180,7 @@ def observer_figure(curves, horizon, level, sweep):
     axes[2].set(xlabel="expected task reward (exact)", ylabel="mean expected log-odds over time",
                 title="legibility vs reward (exact)")
     axes[2].legend(fontsize=7)
+    fig.suptitle("Showing the constraints to the human observer (simulated)", fontsize=10)
     return fig
 
 
@@ -204,6 +206,7 @@ def evidence_figure(paths, posteriors, dt, crossing, radius, level_sets):
     bx.axvline(crossing, color=PALETTE["black"], ls=":", lw=0.8, label="ignorant robot reaches\nthe supervisor's level")
     bx.set(xlabel="time (s)", ylabel="P(H1 | motion so far)", title="supervisor's posterior")
     bx.legend(fontsize=6)
+    fig.suptitle("Evident safety for the supervisor (simulated)", fontsize=10)
     return fig
 
 
@@ -219,7 +222,7 @@ def supervision_figure(interventions, fit, supervisor, fp, refits):
     bx.plot(np.arange(len(fp)), fp["sampled"], "k_", ms=14, label="one sampled judgement per robot")
     bx.set_xticks(np.arange(len(fp)), fp["controller"])
     bx.set(ylabel="P(false-positive intervention)", ylim=(0, 1.05), title="main fit (95% bootstrap CI)")
-    bx.legend(fontsize=6.5)
+    bx.legend(fontsize=6.5, loc="upper right")
     for recovered, colour in ((True, PALETTE["green"]), (False, PALETTE["vermillion"])):
         part = refits[refits["recovered"] == recovered]
         cx.plot(part["seed"], part["p_false_positive"], "o", color=colour,
@@ -227,4 +230,5 @@ def supervision_figure(interventions, fit, supervisor, fp, refits):
     cx.set(xlabel="refit seed", ylabel="P(false positive), learned robot", ylim=(-0.02, 1.05),
            title=f"refits from {fit.n} fresh interventions")
     cx.legend(fontsize=6.5)
+    fig.suptitle("Learning the supervisor and acting on the fit (simulated supervisor)", fontsize=10)
     return fig
