@@ -13,6 +13,9 @@ from ..constraints.demonstrations import Demonstrations
 from ..constraints.mdp import check_mask
 
 
+_ROUNDING = 1e-12  # a probability below this is the sums' rounding (e.g. 1 - 0.9999999999999999) and reported as 0
+
+
 def check_policy(mdp, policy, name="policy"):
     """Validate a policy (T, X, A): finite, non-negative, rows summing to 1 (or 0 for dead states)."""
     pi = np.asarray(policy, dtype=float)
@@ -42,7 +45,8 @@ def policy_outcomes(mdp, policy, allowed=None, forbidden_states=()):
     Returns a dict: ``p_break`` (probability of ever taking an action outside ``allowed``),
     ``p_enter`` (of ever being in a forbidden state, x_0 included), ``p_either``,
     ``expected_reward`` (E[sum_t r(x_t, a_t) + w(x_T)], eq. 2.3), ``p_final`` (X,) the
-    distribution of x_T, and ``occupancy`` (T, X) the state distribution at each t.
+    distribution of x_T, and ``occupancy`` (T, X) the state distribution at each t. Probabilities below
+    1e-12 are the rounding of sums of probabilities and reported as 0.
     """
     pi = check_policy(mdp, policy)
     allowed = check_mask(mdp, allowed, "allowed")
@@ -68,7 +72,8 @@ def policy_outcomes(mdp, policy, allowed=None, forbidden_states=()):
         clean_enter = np.where(avoid, 0.0, _step(mdp, clean_enter, pi[t]))
         mass = _step(mdp, mass, pi[t])
     reward += float(mass @ mdp.terminal_reward)
-    lost = [max(0.0, 1.0 - float(c.sum())) for c in (clean_break, clean_enter, clean_both)]  # rounding: -1e-16
+    lost = [1.0 - float(c.sum()) for c in (clean_break, clean_enter, clean_both)]
+    lost = [v if v > _ROUNDING else 0.0 for v in lost]
     return {"p_break": lost[0], "p_enter": lost[1], "p_either": lost[2], "expected_reward": reward, "p_final": mass,
             "occupancy": occupancy}
 
