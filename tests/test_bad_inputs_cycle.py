@@ -40,6 +40,7 @@ CASES = [
     (time_to_confidence, (np.zeros((1, 3)), 1.0), {}, ValueError, "level"),
     (expected_log_odds, (MDP, UNIFORM, RATIO[:-1]), {}, ValueError, "step_ratio"),
     (expected_log_odds, (MDP, UNIFORM, RATIO), {"prior": 0.0}, ValueError, "prior"),
+    (expected_log_odds, (MDP, UNIFORM, RATIO + np.inf), {}, ValueError, "H0's support"),
     (legibility_weights, (0,), {}, ValueError, "horizon"),
     (legibility_weights, (4, "early"), {}, ValueError, "kind"),
     (legible_backup, (MDP, MASK, RATIO, 0.0, np.ones(T)), {}, ValueError, "alpha"),

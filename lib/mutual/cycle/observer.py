@@ -82,6 +82,9 @@ def expected_log_odds(mdp, policy, step_ratio, prior=0.5):
     ratio = np.asarray(step_ratio, dtype=float)
     if ratio.shape != pi.shape:
         raise ValueError(f"step_ratio: shape {ratio.shape} should match the policy's {pi.shape}")
+    if np.any(np.isposinf(ratio) & (pi > 0)) or np.any(np.isnan(ratio) & (pi > 0)):
+        raise ValueError("step_ratio: the policy takes an action that H0 forbids (+inf) or both forbid (nan); "
+                         "H0's support must contain H1's")
     finite = np.isfinite(ratio)
     alive = mdp.initial.astype(float)       # mass that has not refuted H1
     accrued = np.zeros(mdp.n_states)        # sum over that mass of its log-ratio so far
