@@ -12,15 +12,18 @@ it) and softplus_s(z) = s log(1 + e^{z / s}) a smooth hinge. The legible robot m
 (1 + alpha) J1 - J0 (eq. 6.15), the same feature cost with weights (1 + alpha) w1 - w0.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 
+from scipy import stats
+
 from ..motion.evident_safety import dubins_step
-from ..supervision.dubins import SPEED, TRUE_W_MAX
+from ..supervision.dubins import SPEED, TRUE_W_MAX, avoid_value_closed_form
+from .laplace import best_tail, posterior_over_time, prefix_log_likelihoods
 
 
 def avoid_value(x, w_max, radius, speed=SPEED, smoothing=0.0):
@@ -138,10 +141,6 @@ def solve_path(task, params, guesses=None):
     """The lowest-cost iLQR optimum of the task's cost with ``params`` over the starting controls
     (default :func:`turn_guesses`), as an ILQRResult with states (N+1, 3). Solved as the padded problem
     of :mod:`mutual.cycle.laplace` from stage 0, so paths and the observer's tails share one compiled iLQR."""
-    from dataclasses import replace
-
-    from .laplace import best_tail
-
     best = best_tail(*PROBLEM, np.asarray(task.x0, float), 0, params, guesses or turn_guesses(task), **ILQR_OPTIONS)
     return replace(best, xs=best.xs[:, :-1], K=best.K[:, :, :-1])
 
@@ -177,11 +176,6 @@ def evidence_study(task, fitted, supervisor, alpha, observers=None, prior=0.5, l
     before the supervisor must act), the final posterior, the robot's closest value of V_S and its
     probability of drawing an intervention Phi((mu - min V_S) / sigma); posteriors {(observer, robot): (N+1,)}.
     """
-    from scipy import stats
-
-    from ..supervision.dubins import avoid_value_closed_form
-    from .laplace import posterior_over_time, prefix_log_likelihoods
-
     hyp = task.hypotheses(*fitted, alpha)
     paths = {name: solve_path(task, params) for name, params in hyp.items()}
     w_s, mu_s, sigma_s = supervisor

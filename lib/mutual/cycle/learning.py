@@ -14,11 +14,12 @@ log-likelihood gain is at least half the ``level`` quantile of chi-square with o
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 from scipy import stats
 
 from ..constraints.backup import rank_candidates
 from ..constraints.chance import constraint_mask
-from ..constraints.demonstrations import Demonstrations, check_demonstrations
+from ..constraints.demonstrations import Demonstrations, check_demonstrations, sample_demonstrations
 from ..constraints.inference import constraint_candidates
 from ..constraints.mdp import check_mask, soft_policy
 from .outcomes import policy_outcomes
@@ -186,8 +187,6 @@ def sample_efficiency(mdp, truth, n_values, seeds, relevant, max_rounds=10, leve
     inferred constraints, the truth and no constraints, and on the held-out demonstrations the share
     that the inferred constraints allow and their mean log-likelihood under inferred and true sets.
     """
-    from ..constraints.demonstrations import sample_demonstrations
-
     n_values = sorted(int(n) for n in n_values)
     if not n_values or n_values[0] < 1:
         raise ValueError(f"n_values: need positive numbers of demonstrations, got {n_values!r}")
@@ -210,5 +209,4 @@ def sample_efficiency(mdp, truth, n_values, seeds, relevant, max_rounds=10, leve
                          "heldout_allowed": ok.mean(),
                          "heldout_loglik_inferred": held[ok].mean() if ok.any() else np.nan,
                          "heldout_loglik_truth": held_true[ok].mean() if ok.any() else np.nan})
-    import pandas as pd
     return pd.DataFrame(rows)

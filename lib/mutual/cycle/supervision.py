@@ -15,6 +15,7 @@ from scipy import stats
 
 from ..supervision.control import filter_control
 from ..supervision.dubins import SPEED, TRUE_W_MAX, avoid_value_closed_form, dubins_step
+from ..supervision.fit import fit_supervisor
 from ..supervision.reachability import FULL_GRID, GridSpec, ValueFunction, ValueLibrary
 from ..supervision.supervisor import approach_scenes
 from .intervals import mean_interval
@@ -101,8 +102,6 @@ def learned_false_positives(library, supervisor, n_interventions, seeds, n_robot
     measure the false-positive probability of robots avoiding at ``alpha = mu + k sigma`` of the fit
     (the same ``n_robots`` scenes, from generator ``scene_seed``, for every seed). One row per seed:
     the fitted ``w_max``, ``mu``, ``sigma``, whether ``w_max`` was recovered, and the probability."""
-    from ..supervision.fit import fit_supervisor
-
     rows = []
     for seed in seeds:
         states = collect_interventions(supervisor, n_interventions, np.random.default_rng([seed, 40]), start_distance)
