@@ -5,8 +5,8 @@ safe set (Sec. 4.5), against robots using the Standard or the Conservative safe 
 
 Value functions here are the exact avoid values of the Dubins car around a disk (the closed form
 :func:`mutual.supervision.dubins.avoid_value_closed_form`, no disturbance) sampled on the library's
-grid, so that no Hamilton-Jacobi solve is needed; chapter 4's notebook checks that closed form
-against the HJI solver.
+grid (``method="closed-form"`` of :mod:`mutual.supervision.reachability`), so that no Hamilton-Jacobi
+solve is needed; chapter 4's notebook checks that closed form against the HJI solver.
 """
 
 import numpy as np
@@ -14,30 +14,28 @@ import pandas as pd
 from scipy import stats
 
 from ..supervision.control import filter_control
-from ..supervision.dubins import SPEED, TRUE_W_MAX, avoid_value_closed_form, dubins_step
+from ..supervision.dubins import SPEED, TRUE_W_MAX, dubins_step
 from ..supervision.fit import fit_supervisor
-from ..supervision.reachability import FULL_GRID, GridSpec, ValueFunction, ValueLibrary
+from ..supervision.reachability import FULL_GRID, GridSpec, avoid_value_function, value_library
 from ..supervision.supervisor import approach_scenes
 from .intervals import mean_interval
 
 
 def closed_form_value_function(w_max, obstacle_radius, grid_spec=FULL_GRID, speed=SPEED):
-    """The avoid value function of eq. (4.3) for one Dubins car and a disk, from its closed form
-    evaluated at the grid's nodes, as a :class:`mutual.supervision.reachability.ValueFunction`."""
+    """The avoid value function of eq. (4.3) for one Dubins car and a disk, from its closed form at the
+    grid's nodes (:func:`mutual.supervision.reachability.avoid_value_function`, ``method="closed-form"``)."""
     if not isinstance(grid_spec, GridSpec):
         raise ValueError("grid_spec: must be a mutual.supervision.reachability.GridSpec")
-    xs, ys, ts = grid_spec.coordinate_vectors
-    nodes = np.stack(np.meshgrid(xs, ys, ts, indexing="ij"), -1).reshape(-1, 3)
-    values = avoid_value_closed_form(nodes, w_max, obstacle_radius, speed).reshape(grid_spec.shape)
-    return ValueFunction(float(w_max), float(obstacle_radius), grid_spec, values, float(speed), 0.0, np.inf)
+    return avoid_value_function(w_max, obstacle_radius, grid_spec, speed=speed, progress=False, method="closed-form")
 
 
 def closed_form_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, speed=SPEED):
-    """The library {V_i} of eq. (4.12) over ``w_maxes`` from the closed form (Fig. 4.2)."""
+    """The library {V_i} of eq. (4.12) over ``w_maxes`` from the closed form (Fig. 4.2;
+    :func:`mutual.supervision.reachability.value_library`, ``method="closed-form"``)."""
     w = np.asarray(w_maxes, dtype=float)
     if w.ndim != 1 or w.size == 0 or np.any(~np.isfinite(w)) or np.any(w <= 0) or np.unique(w).size != w.size:
         raise ValueError(f"w_maxes: need distinct positive turn rates, got {w_maxes!r}")
-    return ValueLibrary(tuple(closed_form_value_function(wi, obstacle_radius, grid_spec, speed) for wi in w))
+    return value_library(w, obstacle_radius, grid_spec, speed=speed, progress=False, method="closed-form")
 
 
 def collect_interventions(supervisor, n, rng, start_distance):
