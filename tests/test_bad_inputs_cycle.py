@@ -21,8 +21,9 @@ T, X, A = MDP.horizon, MDP.n_states, MDP.n_actions
 UNIFORM = np.full((T, X, A), 1.0 / A)
 RATIO = np.zeros((T, X, A))
 MASK = np.ones((X, A), dtype=bool)
-DEMOS = Demonstrations(np.zeros((2, T + 1), dtype=int), np.full((2, T), 8))
-OTHER = gridworld(4, 4, start=(0, 0), goal=(3, 0), horizon=4).mdp
+DEMOS = Demonstrations(np.full((2, T + 1), GRID.state(*GRID.goal)), np.full((2, T), 8))      # loiter at the goal
+OTHER_GRID = gridworld(4, 4, start=(0, 0), goal=(3, 0), horizon=4)
+OTHER, OTHER_DEMOS = OTHER_GRID.mdp, Demonstrations(np.full((2, 5), OTHER_GRID.state(3, 0)), np.full((2, 4), 8))
 TASK = dict(x0=(-7.5, -0.5, 0.0), goal=(7.5, -0.5), horizon=5.0, steps=10, a_goal=10.0, a_effort=2.0, a_safe=100.0)
 
 CASES = [
@@ -54,7 +55,7 @@ CASES = [
     (concatenate, ([],), {}, ValueError, "demos_list"),
     (pooled_inference, ([],), {}, ValueError, "tasks"),
     (pooled_inference, ([(MDP, DEMOS)],), {"max_rounds": -1}, ValueError, "max_rounds"),
-    (pooled_inference, ([(MDP, DEMOS), (OTHER, DEMOS)],), {}, ValueError, "dynamics"),
+    (pooled_inference, ([(MDP, DEMOS), (OTHER, OTHER_DEMOS)],), {}, ValueError, "share"),
     (mean_interval, ([1.0, 2.0],), {"method": "jackknife"}, ValueError, "method"),
     (mean_interval, ([1.0, 2.0],), {"level": 1.5}, ValueError, "level"),
     (posterior_over_time, ([0.0], [0.0]), {"prior": 1.0}, ValueError, "prior"),
