@@ -27,7 +27,6 @@ from mutual.compendium.paths import NOTEBOOKS, results_dir  # noqa: E402
 # skips their strictness checks. test_claims_strict fails once a listed notebook is updated, so the
 # set only shrinks.
 AWAITING_PROVENANCE = {
-    "01_constraint_inference", "02_chance_thresholds",
     "06_evident_safety",
 }
 
