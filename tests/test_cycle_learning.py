@@ -129,3 +129,11 @@ def test_summarise_groups():
     df = pd.DataFrame({"g": [1, 1, 2, 2], "v": [0.0, 1.0, 5.0, 5.0]})
     out = summarise(df, "g", ["v"], method="t")
     assert out["v"].tolist() == [0.5, 5.0] and out["n"].tolist() == [2, 2]
+
+
+def test_two_task_pooled_inference_is_the_library_pooled_greedy_inference(world):
+    g1, g2, _, d1, d2 = world
+    ours = pooled_inference([(g1.mdp, d1), (g2.mdp, d2)], max_rounds=5, level=None)
+    library = greedy_inference([g1.mdp, g2.mdp], [d1, d2], ours.candidates, 5, criterion="likelihood")
+    assert ours.chosen == library.chosen
+    np.testing.assert_allclose(ours.total_gain, (d1.n + d2.n) * library.exact_gains, rtol=1e-10)

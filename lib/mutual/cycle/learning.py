@@ -17,10 +17,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..constraints.backup import rank_candidates
 from ..constraints.chance import constraint_mask
-from ..constraints.demonstrations import Demonstrations, check_demonstrations, sample_demonstrations
-from ..constraints.inference import constraint_candidates
+from ..constraints.candidates import as_tasks
+from ..constraints.demonstrations import Demonstrations, sample_demonstrations
+from ..constraints.inference import constraint_candidates, score_candidates
 from ..constraints.mdp import check_mask, soft_policy
 from .outcomes import policy_outcomes
 
@@ -112,23 +112,22 @@ def pooled_inference(tasks, max_rounds=10, level=0.95, candidates=None):
     """Greedy maximum-likelihood inference from demonstrations of several tasks in one world.
 
     ``tasks``: (mdp, demos) pairs that share the dynamics S (same world, other start, goal or
-    reward). Candidates come from all demonstrations pooled (psi* over every demonstrated
-    transition, eq. 3.3). Each round adds the candidate with the largest total exact
-    log-likelihood gain sum_k N_k gain_k (``rank_candidates``), until the gain falls below
+    reward; :func:`mutual.constraints.candidates.as_tasks` checks them). Candidates come from all
+    demonstrations pooled (psi* over every demonstrated transition, eq. 3.3). Each round adds the
+    candidate with the largest total exact log-likelihood gain sum_k N_k gain_k (the library's pooled
+    :func:`mutual.constraints.inference.score_candidates`), until the gain falls below
     :func:`stop_threshold` (``level``; None: no stopping rule) or ``max_rounds`` are done.
     """
     if not tasks:
         raise ValueError("tasks: need at least one (mdp, demos) pair")
-    if not isinstance(max_rounds, (int, np.integer)) or max_rounds < 0:
+    if isinstance(max_rounds, bool) or not isinstance(max_rounds, (int, np.integer)) or max_rounds < 0:
         raise ValueError(f"max_rounds: must be a non-negative integer, got {max_rounds!r}")
-    first = tasks[0][0]
-    for mdp, demos in tasks:
-        if (mdp.n_states, mdp.n_actions) != (first.n_states, first.n_actions) or not _same_dynamics(mdp, first):
-            raise ValueError("tasks: every task must share the first task's dynamics S")
-        check_demonstrations(mdp, demos)
+    tasks = as_tasks([m for m, _ in tasks], [d for _, d in tasks])
     if candidates is None:
-        candidates = constraint_candidates(first, concatenate([d for _, d in tasks]))
+        candidates = constraint_candidates([m for m, _ in tasks], [d for _, d in tasks])
     threshold = -np.inf if level is None else stop_threshold(level)
+    n_total = sum(d.n for _, d in tasks)
+    first = tasks[0][0]
     mask = np.ones((first.n_states, first.n_actions), dtype=bool)
     available = candidates.feasible.copy()
     chosen, gains, stopped = [], [], False
@@ -136,26 +135,16 @@ def pooled_inference(tasks, max_rounds=10, level=0.95, candidates=None):
         idx = np.flatnonzero(available)
         if idx.size == 0:
             break
-        total = np.zeros(idx.size)
-        for mdp, demos in tasks:
-            total += demos.n * rank_candidates(mdp, demos, candidates.forbidden[:, :, idx], mask)[1]
+        total = n_total * score_candidates(tasks, candidates, idx, mask)[1]
         j = int(np.argmax(total))
         if not np.isfinite(total[j]) or total[j] < threshold:
             stopped = True
             break
         chosen.append(int(idx[j]))
         gains.append(float(total[j]))
-        mask &= ~candidates.forbidden[:, :, idx[j]]
+        mask &= ~candidates.forbidden_matrix[:, idx[j]].toarray().reshape(mask.shape)
         available[idx[j]] = False
     return PooledInference(chosen, np.array(gains), mask, candidates, stopped)
-
-
-def _same_dynamics(a, b):
-    if a.is_sparse != b.is_sparse:
-        return np.allclose(a.dense_transitions(), b.dense_transitions())
-    if a.is_sparse:
-        return abs(a.transitions - b.transitions).max() <= 1e-12
-    return np.allclose(a.transitions, b.transitions, atol=1e-12)
 
 
 def per_demo_log_likelihood(mdp, demos, mask=None):
