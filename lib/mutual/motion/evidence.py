@@ -75,7 +75,7 @@ def lead_time(xs, reference, point, dt, margin=SEPARATION_MARGIN):
     result was seen).
 
     ``t_close``: the time of the reference's closest approach; ``t_separate``: the first time at
-    which ``xs`` is farther from ``point`` than the reference by at least ``margin`` times the
+    which ``xs`` is farther from ``point`` than the reference by more than ``margin`` times the
     reference's closest approach (``inf`` if never); ``lead = t_close - t_separate`` (seconds,
     ``-inf`` if it never separates). Returns a dict of the three.
     """
@@ -86,7 +86,7 @@ def lead_time(xs, reference, point, dt, margin=SEPARATION_MARGIN):
         raise ValueError(f"margin must be a positive finite number, got {margin!r}")
     dt = _dt(dt)
     t_close = float(np.argmin(d_ref) * dt)
-    apart = np.nonzero(d - d_ref >= margin * d_ref.min())[0]
+    apart = np.nonzero(d - d_ref > margin * d_ref.min())[0]
     t_sep = float(apart[0] * dt) if apart.size else np.inf
     return {"t_close": t_close, "t_separate": t_sep, "lead": t_close - t_sep}
 

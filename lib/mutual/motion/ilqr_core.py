@@ -172,6 +172,7 @@ def kernels(dynamics, running_cost, terminal_cost):
             QuuK = jnp.sum(Quu[:, :, None] * K[None, :, :], axis=1)  # (m, n)
             QuxK = jnp.sum(Qux[:, :, None] * K[:, None, :], axis=0)  # Qux'K (n, n)
             V = Qxx + QuxK + QuxK.T + jnp.sum(K[:, :, None] * QuuK[:, None, :], axis=0)
+            V = 0.5 * (V + V.T)
             Quuk = jnp.sum(Quu * k[None, :], axis=1)
             v = Qx + jnp.sum(K * (Quuk + Qu)[:, None], axis=0) + jnp.sum(Qux * k[:, None], axis=0)
             return (V, v, d1 + jnp.sum(k * Qu), d2 + 0.5 * jnp.sum(k * Quuk), every_ok & ok), G
