@@ -13,30 +13,58 @@ export PYDEVD_DISABLE_FILE_VALIDATION := 1
 export OMP_NUM_THREADS ?= 2
 export OPENBLAS_NUM_THREADS ?= 2
 
-.PHONY: figures test bench lab lock clean distclean env
+# The git clean filter that strips outputs from notebooks on `git add` (.gitattributes): nbstripout,
+# with the compendium's settings (lib/mutual/compendium/hygiene.py; also the lab's pre-save hook)
+NBSTRIP := $(BIN)/python -m mutual.compendium.hygiene
+# JupyterLab refuses to start as root without --allow-root
+LABFLAGS   ?=
+ALLOW_ROOT := $(if $(filter 0,$(shell id -u)),--allow-root)
 
-## figures: run every notebook (full parameters), rebuild figures/ and figures/REPRODUCTION.md
-figures: $(READY)
-	@echo "==> executing $(words $(NOTEBOOKS)) notebooks with papermill (executed copies in build/)"
-	$(BIN)/python -m mutual.compendium.notebooks $(NOTEBOOKS)
+.PHONY: figures test bench bench-quick lab lock clean distclean env git-filter
+
+## figures: run every notebook (full parameters), rebuild figures/, data/ and figures/REPRODUCTION.md;
+##          the only command that writes them (and the README's verdict counts)
+figures: $(READY) git-filter
+	@echo "==> executing $(words $(NOTEBOOKS)) notebooks (outputs to figures/, executed copies in build/executed/)"
+	$(BIN)/python -m mutual.compendium.notebooks --output figures $(NOTEBOOKS)
 	@echo "==> building the reproduction report"
-	$(BIN)/python -m mutual.compendium.report
+	$(BIN)/python -m mutual.compendium.report --output figures --readme README.md
 
-## test: unit tests plus a quick run of every notebook
-test: $(READY)
+## test: unit tests plus a quick run of every notebook (outputs to a temporary folder)
+test: $(READY) git-filter
 	@echo "==> running the tests (unit tests and every notebook with quick parameters)"
 	$(BIN)/python -m pytest
 
-## bench: timings side by side, printed and written to figures/benchmarks.md
+## bench: timings side by side, printed and written to figures/benchmarks.md;
+##        `make bench QUICK=1` (or `make bench-quick`): small sizes, written to build/bench/ only
 bench: $(READY)
-	$(BIN)/python bench/run.py
+	$(BIN)/python bench/run.py $(if $(QUICK),--quick)
 
-## lab: JupyterLab on the notebooks with the project's kernel
-lab: $(READY)
-	$(BIN)/jupyter lab --notebook-dir=notebooks
+bench-quick:
+	$(MAKE) bench QUICK=1
 
-## env: create or refresh the pinned environment only
-env: $(READY)
+## lab: JupyterLab on notebooks/00_overview.ipynb with the kernel "mutual"; what you run there
+##      writes to build/scratch/, never to figures/, and notebooks/ are saved without outputs
+##      (extra flags: make lab LABFLAGS="--no-browser --port=8899")
+lab: $(READY) git-filter
+	@echo "==> JupyterLab: outputs of notebooks run here go to build/scratch/ (only make figures writes figures/)"
+	env -u MUTUAL_OUTPUT_DIR $(BIN)/jupyter lab --ServerApp.root_dir="$(CURDIR)" $(ALLOW_ROOT) \
+		--ContentsManager.pre_save_hook=mutual.compendium.hygiene.strip_before_save $(LABFLAGS) \
+		notebooks/00_overview.ipynb
+
+## env: create or refresh the pinned environment and the git filter
+env: $(READY) git-filter
+
+# Installs (or updates) the nbstripout filter in this clone's git config; commands run from the
+# top of the work tree, so the relative path finds this checkout's .venv. Outside git: nothing.
+git-filter: $(READY)
+	@if git rev-parse --is-inside-work-tree >/dev/null 2>&1 && \
+	    [ "$$(git config --get filter.nbstripout.clean)" != '$(NBSTRIP)' ]; then \
+		git config filter.nbstripout.clean '$(NBSTRIP)' && \
+		git config filter.nbstripout.smudge cat && \
+		git config diff.ipynb.textconv '$(NBSTRIP) --textconv' && \
+		echo "==> installed the git filter that strips notebook outputs on commit (.gitattributes)"; \
+	fi
 
 # The environment is rebuilt whenever the lock or the package metadata changes.
 $(READY): environment.lock pyproject.toml

@@ -1,27 +1,83 @@
-"""Run every benchmark (bench/bench_*.py) and print one table of timings and
-ratios measured side by side, also written to figures/benchmarks.md.
+"""Run every benchmark (bench/bench_*.py) and print one table of timings and ratios measured side by
+side, with the machine and the versions they were measured on.
 
 Each module defines ``run(quick=False) -> list[dict]`` with rows
 ``{"benchmark", "case", "seconds", "baseline", "baseline_seconds", "compile_seconds", "agree",
 "target", "met"}``: ``case`` names the problem and its size, ``baseline`` what a skilled
 practitioner would use, ``compile_seconds`` the one-off compile time (excluded from ``seconds``),
 ``agree`` whether both give the same result and how that was checked.
-Usage: ``python bench/run.py [--quick] [NAME ...]`` (NAME filters the modules).
+
+Usage: ``python bench/run.py [--quick] [--out PATH] [NAME ...]`` (NAME filters the modules).
+Only a full run of every module writes the committed ``figures/benchmarks.md``; a quick or filtered
+run writes ``build/bench/benchmarks-quick.md`` / ``benchmarks-partial.md``. A module that fails is
+reported in the table and makes the exit status non-zero; the others still run.
 """
 
 import argparse
+import datetime
+import importlib.metadata
 import importlib.util
+import os
 import platform
+import subprocess
 import sys
+import time
+import traceback
+from pathlib import Path
 
 import pandas as pd
 
 from mutual.atomic import write_text
 from mutual.compendium.figures import markdown_table
-from mutual.compendium.paths import ROOT, figures_dir
+from mutual.compendium.paths import BUILD, FIGURES, ROOT
 
+BENCH = ROOT / "bench"
 COLUMNS = ["benchmark", "case", "seconds", "baseline", "baseline_seconds", "ratio", "compile_seconds", "agree",
            "target", "met"]
+SHOWN = {"case": "case (problem, size)", "baseline_seconds": "baseline seconds", "compile_seconds": "compile seconds",
+         "agree": "agreement (how checked)"}
+VERSIONS = ["numpy", "scipy", "jax", "jaxlib", "optax", "pandas", "cvxpy", "hj-reachability", "statsmodels"]
+BUDGET = {True: 180, False: 1200}  # seconds: quick mode, full run (2 cores)
+
+
+def machine():
+    """The machine the timings were measured on, and its load when the run started."""
+    model = next((line.split(":", 1)[1].strip() for line in _read("/proc/cpuinfo").splitlines()
+                  if line.startswith("model name")), platform.processor() or platform.machine())
+    memory = next((int(line.split()[1]) / 2**20 for line in _read("/proc/meminfo").splitlines()
+                   if line.startswith("MemTotal")), None)
+    usable = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    load = ", ".join(f"{v:.2f}" for v in os.getloadavg())
+    threads = ", ".join(f"{k}={os.environ[k]}" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS") if k in os.environ)
+    return {"cpu": f"{model} ({platform.machine()})", "cores": f"{usable} usable of {os.cpu_count()}",
+            "memory": f"{memory:.1f} GiB" if memory else "unknown", "load average at start (1, 5, 15 min)": load,
+            "threads": threads or "library defaults"}
+
+
+def versions():
+    found = {"python": platform.python_version()}
+    for name in VERSIONS:
+        try:
+            found[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            found[name] = "not installed"
+    return found
+
+
+def _read(path):
+    try:
+        return Path(path).read_text()
+    except OSError:
+        return ""
+
+
+def _commit():
+    try:
+        out = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True,
+                             text=True, timeout=10)
+        return out.stdout.strip() or "unknown"
+    except (OSError, subprocess.TimeoutExpired):
+        return "unknown"
 
 
 def _load(path):
@@ -31,34 +87,94 @@ def _load(path):
     return module
 
 
-def collect(quick, names):
-    rows = []
-    for path in sorted((ROOT / "bench").glob("bench_*.py")):
+def collect(quick, names, folder=BENCH):
+    """Rows of every module (``bench_*.py`` in ``folder`` whose name contains one of ``names``), the
+    wall time per module, and the modules that failed (name -> one-line error)."""
+    rows, walls, failed = [], {}, {}
+    for path in sorted(Path(folder).glob("bench_*.py")):
         if names and not any(n in path.stem for n in names):
             continue
         print(f"==> {path.stem}", flush=True)
-        for row in _load(path).run(quick=quick):
-            base = row.get("baseline_seconds")
-            rows.append({**row, "ratio": base / row["seconds"] if base else None})
-    return pd.DataFrame(rows, columns=COLUMNS)
+        start = time.perf_counter()
+        try:
+            produced = _load(path).run(quick=quick)
+            for row in produced:
+                missing = {"benchmark", "case", "seconds"} - set(row)
+                if missing:
+                    raise ValueError(f"a row lacks {sorted(missing)}: {row}")
+                base = row.get("baseline_seconds")
+                rows.append({**row, "ratio": base / row["seconds"] if base and row["seconds"] else None})
+        except Exception as err:  # noqa: BLE001 (one module's failure must not hide the others' rows)
+            failed[path.stem] = f"{type(err).__name__}: {err}"
+            traceback.print_exc()
+            rows.append({"benchmark": path.stem, "case": "FAILED: " + failed[path.stem], "seconds": None})
+        walls[path.stem] = time.perf_counter() - start
+        print(f"    {walls[path.stem]:.1f} s", flush=True)
+    return pd.DataFrame(rows, columns=COLUMNS), walls, failed
+
+
+def gaps(table):
+    """Rows that do not state what the table promises (a baseline time, how agreement was checked)."""
+    out = []
+    for row in table.itertuples(index=False):
+        has_baseline = isinstance(row.baseline, str) and row.baseline.strip()
+        if has_baseline and pd.isna(row.baseline_seconds):
+            out.append(f"{row.benchmark} / {row.case}: names a baseline but no baseline time")
+        if has_baseline and not (isinstance(row.agree, str) and row.agree.strip()):
+            out.append(f"{row.benchmark} / {row.case}: does not say whether the results agree or how that was checked")
+    return out
+
+
+def render(table, walls, failed, quick, names, started, total, host):
+    shown = table.copy()
+    shown["met"] = shown["met"].map({True: "yes", False: "NO"}).fillna("")
+    shown["compile_seconds"] = shown["compile_seconds"].astype(object).where(shown["compile_seconds"].notna(), "-")
+    shown = shown.astype(object).where(shown.notna(), "").rename(columns=SHOWN)
+    mode = "quick (small sizes)" if quick else "full"
+    lines = ["# Benchmarks", "",
+             f"Measured by `make bench{' QUICK=1' if quick else ''}` ({mode}{', modules: ' + ', '.join(names) if names else ''})"
+             f" on {started:%Y-%m-%d %H:%M} UTC at commit `{_commit()}`, in {total:.0f} s.",
+             "`ratio` = baseline seconds / seconds (higher is faster); `compile seconds` is the one-off compile time,",
+             "excluded from `seconds`; `-` where the row reports none.", "", "## Machine", ""]
+    lines += [f"- {k}: {v}" for k, v in host.items()]
+    lines += ["", "## Versions", "", "- " + ", ".join(f"{k} {v}" for k, v in versions().items()), "",
+              "## Timings", "", markdown_table(shown, floatfmt=".3g").rstrip(), "",
+              "Wall time per module: " + ", ".join(f"{k} {v:.0f} s" for k, v in walls.items()) + "."]
+    notes = gaps(table)
+    if notes:
+        lines += ["", "Rows that do not state everything the table promises:", ""] + [f"- {n}" for n in notes]
+    if failed:
+        lines += ["", "Modules that failed:", ""] + [f"- {k}: {v}" for k, v in failed.items()]
+    if total > BUDGET[quick]:
+        lines += ["", f"Over budget: {total:.0f} s (budget {BUDGET[quick]} s for a {mode} run on 2 cores)."]
+    return "\n".join(lines) + "\n"
+
+
+def default_output(quick, names):
+    """Only a full run of every module writes the committed table."""
+    if quick:
+        return BUILD / "bench" / "benchmarks-quick.md"
+    return BUILD / "bench" / "benchmarks-partial.md" if names else FIGURES / "benchmarks.md"
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description="Run the compendium's benchmarks.")
-    parser.add_argument("--quick", action="store_true", help="small sizes (smoke test)")
+    parser.add_argument("--quick", action="store_true", help="small sizes (under 3 minutes); never writes figures/")
+    parser.add_argument("--out", type=Path, help="where to write the table (default: see the module docstring)")
+    parser.add_argument("--modules", type=Path, default=BENCH, help=argparse.SUPPRESS)
     parser.add_argument("names", nargs="*", help="only modules whose name contains one of these")
     args = parser.parse_args(argv)
-    table = collect(args.quick, args.names)
-    table["met"] = table["met"].map({True: "yes", False: "NO"}).fillna("")
-    for col in ("baseline", "target", "agree"):
-        table[col] = table[col].fillna("")
-    text = markdown_table(table.astype(object).fillna(""), floatfmt=".3g")
+    host = machine()  # before the run: the load average at its start
+    started, start = datetime.datetime.now(datetime.timezone.utc), time.perf_counter()
+    table, walls, failed = collect(args.quick, args.names, args.modules)
+    text = render(table, walls, failed, args.quick, args.names, started, time.perf_counter() - start, host)
     print(text)
-    if not args.quick:
-        header = (f"# Benchmarks\n\nMeasured by `make bench` on {platform.machine()} with "
-                  f"{__import__('os').cpu_count()} cores, Python {platform.python_version()}. "
-                  "`ratio` = baseline seconds / seconds (higher is faster).\n\n")
-        print(f"wrote {write_text(figures_dir() / 'benchmarks.md', header + text)}")
+    out = args.out or default_output(args.quick, args.names)
+    print(f"wrote {write_text(out, text)}")
+    if failed:
+        print(f"benchmarks failed: {', '.join(failed)}", file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == "__main__":

@@ -183,3 +183,37 @@ def test_bad_input_names_the_argument(kwargs, match):
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         solve_lq(**args)
+
+
+@pytest.mark.parametrize("seed,convex_state,m", [(0, True, 2), (2, False, 2), (3, True, 5)])
+def test_compiled_backend_matches_numpy(seed, convex_state, m):
+    """The compiled recursion (JAX, padded horizon; unrolled Cholesky for m <= 4, LAPACK above) gives the
+    reference solution, gains and value function."""
+    p = random_problem(seed, convex_state=convex_state, m=m)
+    ref, fast = solve(p), solve_lq(p["A"], p["B"], p["Q"], p["R"], p["x0"], p["N"], q=p["q"], r=p["r"], QN=p["QN"],
+                                   qN=p["qN"], M=p["M"], c=p["c"], backend="jax")
+    for name in ("xs", "us", "K", "k", "V", "v"):
+        np.testing.assert_allclose(getattr(fast, name), getattr(ref, name), atol=1e-10, err_msg=name)
+    assert fast.cost == pytest.approx(ref.cost, rel=1e-12, abs=1e-12)
+
+
+def test_compiled_backend_time_invariant_long_horizon():
+    A = np.array([[1.0, 0.1], [0.0, 1.0]])
+    B = np.array([[0.005], [0.1]])
+    args = (A, B, np.diag([1.0, 0.5]), np.array([[0.2]]), np.array([1.0, -1.0]), 333)
+    ref, fast = solve_lq(*args, QN=np.eye(2)), solve_lq(*args, QN=np.eye(2), backend="jax")
+    np.testing.assert_allclose(fast.us, ref.us, atol=1e-12)
+    assert fast.cost == pytest.approx(ref.cost, rel=1e-12)
+
+
+@pytest.mark.parametrize("m", [2, 5])
+def test_compiled_backend_refuses_unbounded(m):
+    I = np.eye(m)
+    with pytest.raises(ValueError, match="unbounded LQ problem: the control Hessian R \\+ B'VB at stage 9"):
+        solve_lq(I, 0.1 * I, np.zeros((m, m)), 0.01 * I, np.zeros(m), 10, QN=-10 * I, qN=np.ones(m), backend="jax")
+
+
+def test_solution_repr_is_short():
+    p = random_problem(0, N=200)
+    text = repr(solve(p))
+    assert text.startswith("LQSolution(N=200, n=3, m=2, cost=") and len(text) < 120

@@ -3,6 +3,7 @@ results files, the reproduction report and the notebook runner."""
 
 import hashlib
 import json
+import re
 import subprocess
 import sys
 import textwrap
@@ -12,6 +13,7 @@ import pandas as pd
 import pytest
 
 import mutual.compendium.paths as paths
+import mutual.compendium.runs as runs
 from mutual.atomic import atomic_path
 from mutual.compendium.claims import verdict
 from mutual.compendium.figures import save_animation, save_table, savefig
@@ -100,11 +102,20 @@ CLAIMS = pd.DataFrame([
 
 @pytest.fixture
 def claims_file(tmp_path, monkeypatch):
+    """The claims above, an output folder in ``tmp_path`` and a run of the notebook ``09_demo`` (as the
+    runner would tell its kernel), so that ``write_results("09_demo", ...)`` works in-process."""
     path = tmp_path / "claims.csv"
     CLAIMS.to_csv(path, index=False)
     monkeypatch.setattr(paths, "CLAIMS", path)
     monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(tmp_path / "figures"))
+    notebook = _notebook(tmp_path, "quick = False", "x = 1", name="09_demo")
+    for key, value in runs.kernel_env(notebook, {}).items():
+        monkeypatch.setenv(key, value)
     return path
+
+
+def entry(value, note="n = 50", by="mutual.study.stats.rm_anova", **more):
+    return {"value": value, "note": note, "computed_by": by, **more}
 
 
 @pytest.mark.parametrize("cid, got, expected", [
@@ -119,41 +130,73 @@ def test_verdicts(cid, got, expected):
 
 
 def test_report_lists_every_claim_with_its_verdict(claims_file):
-    write_results("09_demo", {"c9-abs": 0.3, "c9-ge": {"value": 0.99, "note": "n = 50"},
-                              "c9-true": True, "c9-human": {"value": 4.0, "simulated": True}})
+    write_results("09_demo", {"c9-abs": entry(0.3), "c9-ge": entry(0.99), "c9-true": entry(True),
+                              "c9-human": entry(4.0, simulated=True), "c9-p-from-f": entry(0.0021),
+                              "c9-open": entry([1.5, 4.0])})
     text = build_report().read_text()
     rows = {line.split(" | ")[0].strip("| "): line for line in text.splitlines() if line.startswith("| c9-")}
     assert set(rows) == set(CLAIMS["id"])
     assert "| reproduced |" in rows["c9-abs"] and "| pending |" in rows["c9-pending"]
-    assert "0.99 (n = 50)" in rows["c9-ge"]
+    assert "0.99 (n = 50; mutual.study.stats.rm_anova)" in rows["c9-ge"]
     assert "| not reproducible without the original data | yes |" in rows["c9-human"]
-    assert ("3 reproduced, 0 consistent, 0 differs, 0 undetermined, 1 not reproducible without the original data, "
-            "3 pending") in text
+    assert "| consistent |" in rows["c9-p-from-f"] and "| undetermined |" in rows["c9-open"]
+    assert ("Summary: 3 reproduced, 1 consistent, 0 differs, 1 undetermined, 1 not reproducible without the original "
+            "data, 1 pending (of 7 claims).") in text
+    assert "Not the committed report" not in text  # a full run
 
 
 def test_unknown_claim_id_is_an_error(claims_file, tmp_path):
     with pytest.raises(ValueError, match="c9-nope"):
-        write_results("09_demo", {"c9-nope": 1.0})
-    results = tmp_path / "figures" / "results"
-    results.mkdir(parents=True)
-    (results / "09_demo.json").write_text(json.dumps({"notebook": "09_demo", "claims": {"c9-nope": {
-        "value": 1.0, "simulated": False, "note": ""}}}))
+        write_results("09_demo", {"c9-nope": entry(1.0)})
+    path = write_results("09_demo", {"c9-abs": entry(0.3)})
+    doc = json.loads(path.read_text())
+    doc["claims"]["c9-nope"] = doc["claims"].pop("c9-abs")
+    path.write_text(json.dumps(doc))
     with pytest.raises(ValueError, match="unknown claim id 'c9-nope'"):
         build_report()
 
 
 def test_non_finite_results_are_refused(claims_file):
     with pytest.raises(ValueError, match="not finite"):
-        write_results("09_demo", {"c9-abs": float("nan")})
+        write_results("09_demo", {"c9-abs": entry(float("nan"))})
 
 
-def _notebook(tmp_path, *sources, tagged=True):
+@pytest.mark.parametrize("bad, message", [
+    ({"value": 0.3, "computed_by": "mutual.study.stats.rm_anova"}, "claim 'c9-abs': the entry needs 'note'"),
+    ({"value": 0.3, "note": "n = 50"}, "claim 'c9-abs': the entry needs 'computed_by'"),
+    ({"value": 0.3, "note": " ", "computed_by": "mutual.study.stats.rm_anova"}, "needs 'note'"),
+    (entry(0.3, by="numpy.mean"), "must name a library function of mutual"),
+    (entry(0.3, by="mutual.compendium.results.write_results"), "not the compendium's machinery"),
+    (entry(0.3, by="mutual.study.stats.no_such_function"), "mutual.study.stats has no no_such_function"),
+    (entry(0.3, by="mutual.study.no_such_module.f"), "mutual.study has no no_such_module.f"),
+    (entry(0.3, by="mutual.__version__"), "is not a function or class"),
+    (0.3, "the entry must be a dict"),
+])
+def test_every_result_names_its_computation(claims_file, bad, message):
+    with pytest.raises(ValueError, match=re.escape(message)) as err:
+        write_results("09_demo", {"c9-abs": bad})
+    assert "notebook 09_demo" in str(err.value)
+
+
+def test_results_record_their_run(claims_file, monkeypatch):
+    doc = json.loads(write_results("09_demo", {"c9-abs": entry(0.3)}).read_text())
+    assert doc["run"]["mode"] == "full" and doc["run"]["parameters"] == {}
+    assert doc["run"]["code_sha256"] == runs.code_sha256(claims_file.parent / "09_demo.ipynb")
+    monkeypatch.setenv(runs.ENV_MODE, "quick")
+    monkeypatch.setenv(runs.ENV_PARAMETERS, '{"quick": true}')
+    doc = json.loads(write_results("09_demo", {"c9-abs": entry(0.3)}).read_text())
+    assert doc["run"]["mode"] == "quick" and doc["run"]["parameters"] == {"quick": True}
+    with pytest.raises(ValueError, match="name the results after the notebook's file"):
+        write_results("09_other", {"c9-abs": entry(0.3)})
+
+
+def _notebook(tmp_path, *sources, tagged=True, name="99_demo"):
     nb = nbformat.v4.new_notebook()
     nb.metadata["kernelspec"] = {"name": "mutual", "display_name": "Python (mutual)", "language": "python"}
     nb.cells = [nbformat.v4.new_code_cell(s) for s in sources]
     if tagged:
         nb.cells[0].metadata["tags"] = ["parameters"]
-    path = tmp_path / "99_demo.ipynb"
+    path = tmp_path / f"{name}.ipynb"
     nbformat.write(nb, path)
     return path
 
@@ -179,6 +222,7 @@ def test_make_figures_runner_exits_non_zero_naming_the_notebook(tmp_path):
                          capture_output=True, text=True, cwd=tmp_path)
     assert out.returncode != 0
     assert "99_demo.ipynb failed in code cell 2 ('1 / 0')" in out.stderr and "ZeroDivisionError" in out.stderr
+    assert "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1
 
 
 def test_rules_must_fit_their_basis():
@@ -193,11 +237,21 @@ def test_rules_must_fit_their_basis():
 
 def test_extensions_are_reported_apart_from_the_verdicts(claims_file):
     from mutual.compendium.results import write_extensions
-    write_results("09_demo", {"c9-abs": 0.3})
+    write_results("09_demo", {"c9-abs": entry(0.3)})
     write_extensions("09_demo", {"power-n80": {"statement": "N for 80% power", "value": 14,
-                                               "computed_by": "mutual.study.power.sample_size"}})
+                                               "computed_by": "mutual.study.stats.rm_anova"}})
     text = build_report().read_text()
     summary, extensions = text.split("## Extensions beyond the thesis")
-    assert "1 reproduced" in summary and "N for 80% power | 14 | yes | mutual.study.power.sample_size" in extensions
+    assert "1 reproduced" in summary and "N for 80% power | 14 | yes | mutual.study.stats.rm_anova" in extensions
     with pytest.raises(ValueError, match="computed_by"):
         write_extensions("09_demo", {"x": {"statement": "s", "value": 1}})
+
+
+def test_batch_runs_print_no_progress_bars(tmp_path):
+    """TQDM_DISABLE=1 plus the runner's kernel start-up line: even a bar asked for explicitly stays silent."""
+    path = _notebook(tmp_path, "quick = False", "import os\nfrom tqdm import tqdm\nfrom tqdm.auto import tqdm as auto\n"
+                     "total = sum(tqdm(range(5), disable=False, desc='loud')) + sum(auto(range(5)))\n"
+                     "print(total, os.environ['TQDM_DISABLE'])")
+    nb = execute(path, {"quick": True})
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+    assert [o.get("text") for o in outputs] == ["20 1\n"], outputs

@@ -1,12 +1,16 @@
 """Avoid value functions from hj-reachability against the closed form, trajectories and the cache."""
 
+import warnings
+
 import numpy as np
 import pytest
 
 import mutual.supervision.reachability as reach
-from mutual.supervision.dubins import avoid_value_closed_form, dubins_step, keep_out_margin
+from mutual.supervision import value_cache
+from mutual.supervision.dubins import avoid_value_closed_form, dubins_step, keep_out_margin, unsafe_reach
 from mutual.supervision.reachability import (QUICK_GRID, GridSpec, SolverSpec, ValueFunction, unsafe_set_contains,
-                                 value_library)
+                                             value_drift, value_library)
+from mutual.supervision.value_cache import CacheWarning
 
 W_MAXES = 0.25 * np.arange(1, 13)
 RADIUS = 1.0
@@ -121,7 +125,7 @@ def test_cache_serves_second_call_and_recomputes_on_any_key_change(cache, monkey
 
     def counting(w_maxes, *args):
         calls.append(list(w_maxes))
-        return real(w_maxes, *args)
+        yield from real(w_maxes, *args)
 
     monkeypatch.setattr(reach, "_converge", counting)
     first = value_library([1.0, 2.0], RADIUS, spec, progress=False)
@@ -172,11 +176,148 @@ def test_bad_library_inputs_raise(kwargs, match):
         value_library(**args)
 
 
-@pytest.mark.parametrize("make, match", [
-    (lambda: GridSpec(8.0, (41, 41)), "shape"), (lambda: GridSpec(-1.0), "half_width"),
-    (lambda: SolverSpec(accuracy="best"), "accuracy"), (lambda: SolverSpec(tolerance=0), "tolerance"),
-    (lambda: ValueFunction(1.0, 1.0, QUICK_GRID, np.zeros((3, 3, 3))), "shape"),
-])
-def test_bad_specs_raise(make, match):
-    with pytest.raises(ValueError, match=match):
-        make()
+# ---------------------------------------------------------------------------- the closed-form method
+
+@pytest.mark.parametrize("w_max", [0.25, 1.0, 2.7])
+def test_closed_form_library_is_the_oracle_at_every_node(w_max):
+    spec = GridSpec(8.0, (33, 29, 16))
+    vf = value_library([w_max], RADIUS, spec, method="closed-form")[0]
+    assert vf.method == "closed-form" and vf.horizon == np.inf
+    exact = avoid_value_closed_form(_grid_states(spec), w_max, RADIUS).reshape(spec.shape)
+    assert np.allclose(vf.values, exact, atol=1e-5)
+
+
+def test_closed_form_refuses_a_disturbance(cache):
+    with pytest.raises(ValueError, match="exact only without a disturbance"):
+        value_library([1.0], RADIUS, QUICK_GRID, d_max=0.1, method="closed-form")
+    with pytest.raises(ValueError, match="exact only without a disturbance"):
+        reach.avoid_value_function(1.0, RADIUS, QUICK_GRID, d_max=0.1, method="closed-form")
+
+
+def test_hj_and_closed_form_disagree_only_near_the_zero_level_set(library):
+    exact = value_library(W_MAXES, RADIUS, QUICK_GRID, method="closed-form")
+    dx = QUICK_GRID.spacings[0]
+    for hj_vf, cf in zip(library, exact):
+        flipped = (hj_vf.values < 0) != (cf.values < 0)
+        assert flipped.mean() < 0.005
+        # every disagreement on safety lies within 1.5 cells of the exact zero level set
+        assert np.all(np.abs(cf.values[flipped]) < 1.5 * dx)
+
+
+@pytest.mark.parametrize("w_max", [0.5, 1.0, 2.0])
+def test_head_on_reach_matches_the_formula(library, w_max):
+    dx = QUICK_GRID.spacings[0]
+    exact = value_library([w_max], RADIUS, QUICK_GRID, method="closed-form")[0]
+    # the closed form at the nodes, linearly interpolated along x: second-order accurate
+    assert exact.head_on_reach() == pytest.approx(unsafe_reach(w_max, RADIUS), abs=0.05 * dx)
+    assert library[library.index_of(w_max)].head_on_reach() == pytest.approx(unsafe_reach(w_max, RADIUS), abs=dx)
+
+
+def test_drift_after_convergence_is_within_the_tolerance(cache):
+    spec = GridSpec(8.0, (21, 21, 12))
+    vf = value_library([1.0], RADIUS, spec, progress=False)[0]
+    in_safe_set, everywhere = value_drift(vf, 2.0)
+    assert 0 <= in_safe_set <= everywhere
+    assert everywhere < 4 * SolverSpec().tolerance
+    with pytest.raises(ValueError, match="method='hj'"):
+        value_drift(value_library([1.0], RADIUS, spec, method="closed-form")[0], 1.0)
+
+
+# ---------------------------------------------------------------------------- short summaries (issue 11)
+
+def test_value_function_and_library_print_short_summaries(library):
+    for obj, words in [(library[3], ["w_max=1", "method='hj'", "41x41x24", "horizon="]),
+                       (library, ["12 members", "w_max 0.25..3", "obstacle_radius=1"])]:
+        text = repr(obj)
+        assert len(text) < 250 and "array" not in text and "\n" not in text
+        for word in words:
+            assert word in text, (word, text)
+    assert library[3].values.shape == QUICK_GRID.shape  # the data stays available
+
+
+# ---------------------------------------------------------------------------- the cache heals (issue 13)
+
+SMALL = GridSpec(8.0, (21, 21, 12))
+
+
+@pytest.fixture
+def private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("MUTUAL_CACHE_DIR", str(tmp_path))
+    return tmp_path
+
+
+def _damage(path, how, other=None):
+    data = path.read_bytes()
+    if how == "truncated":
+        path.write_bytes(data[: len(data) // 2])
+    elif how == "garbage":
+        path.write_bytes(np.random.default_rng(0).bytes(len(data)))
+    elif how == "empty":
+        path.write_bytes(b"")
+    elif how == "bit-flip":  # a valid zip whose values no longer match the checksum
+        with np.load(path) as f:
+            fields = {k: f[k] for k in f.files}
+        fields["values"] = fields["values"].copy()
+        fields["values"].flat[123] += 0.5
+        np.savez(path, **fields)
+    elif how == "foreign":  # a valid file of another member copied over this one
+        path.write_bytes(other.read_bytes())
+    elif how == "nan":  # NaN values with a checksum that matches them (a solver gone wrong)
+        with np.load(path) as f:
+            key, horizon, values = str(f["key"]), float(f["horizon"]), f["values"].copy()
+        values.flat[7] = np.nan
+        np.savez(path, values=values, horizon=horizon, key=key, checksum=value_cache._checksum(key, values, horizon))
+    elif how == "old-format":
+        with np.load(path) as f:
+            np.savez(path, values=f["values"], horizon=f["horizon"])
+    else:
+        raise AssertionError(how)
+
+
+@pytest.mark.parametrize("how", ["truncated", "garbage", "empty", "bit-flip", "foreign", "nan", "old-format"])
+def test_a_damaged_cache_file_warns_with_its_path_and_is_rebuilt(private_cache, how):
+    fresh = value_library([1.0, 2.0], RADIUS, SMALL, progress=False)
+    key = reach.cache_key(1.0, RADIUS, reach.SPEED, 0.0, SMALL, SolverSpec())
+    path = value_cache.cache_file(key)
+    other = value_cache.cache_file(reach.cache_key(2.0, RADIUS, reach.SPEED, 0.0, SMALL, SolverSpec()))
+    assert path.exists() and other.exists()
+    _damage(path, how, other)
+    with pytest.warns(CacheWarning, match=str(path)):
+        again = value_library([1.0, 2.0], RADIUS, SMALL, progress=False)
+    assert np.array_equal(again[0].values, fresh[0].values)
+    assert np.array_equal(again[1].values, fresh[1].values)
+    # the file was rewritten and verifies: a third call is silent
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        third = value_library([1.0], RADIUS, SMALL, progress=False)
+    assert np.array_equal(third[0].values, fresh[0].values)
+
+
+def test_an_interrupted_build_keeps_its_finished_members(private_cache, monkeypatch):
+    real = reach._converge
+    computed = []
+
+    def interrupted(w_maxes, *args):
+        for item in real(w_maxes, *args):
+            computed.append(item[0])
+            yield item
+            if len(computed) == 1:
+                raise KeyboardInterrupt
+
+    monkeypatch.setattr(reach, "_converge", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        value_library([1.0, 2.0, 3.0], RADIUS, SMALL, progress=False)
+    saved = sorted(private_cache.glob("reachability/*.npz"))
+    assert len(saved) == 1
+    assert saved[0] == value_cache.cache_file(reach.cache_key(1.0, RADIUS, reach.SPEED, 0.0, SMALL, SolverSpec()))
+    assert not list(private_cache.glob("reachability/.*"))  # no temporary files left behind
+    monkeypatch.setattr(reach, "_converge", real)
+    calls = []
+
+    def counting(w_maxes, *args):
+        calls.append(list(w_maxes))
+        yield from real(w_maxes, *args)
+
+    monkeypatch.setattr(reach, "_converge", counting)
+    value_library([1.0, 2.0, 3.0], RADIUS, SMALL, progress=False)
+    assert calls == [[2.0, 3.0]]

@@ -45,6 +45,17 @@ def test_twelve_participants_are_fully_balanced():
             tuple(sorted(p)) for p in permutations(TREATMENTS, 2) if p[0] < p[1])
 
 
+def test_any_three_treatment_names():
+    names = ("baseline", "our-method", "cautious")
+    d = study_design(12, seed=1, treatments=names)
+    bal = design_balance(d, treatments=names)
+    assert set(d["treatment"]) == set(names) and bal["all_pairs"] and bal["no_treatment_first_twice"]
+    assert (bal["version_counts"].to_numpy() == 4).all()
+    # the same schedule as the thesis's names, relabelled
+    ref = study_design(12, seed=1).replace(dict(zip(TREATMENTS, names)))
+    assert (d["treatment"] == ref["treatment"]).all()
+
+
 def test_bad_design_arguments():
     with pytest.raises(ValueError, match="n_participants"):
         study_design(0)

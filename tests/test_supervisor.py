@@ -1,5 +1,7 @@
 """The noisy idealized supervisor, its maximum-likelihood fit, the safety controller and the CSV."""
 
+import warnings
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -7,8 +9,10 @@ from scipy import stats
 
 from mutual.supervision.dubins import keep_out_margin
 from mutual.supervision.reachability import QUICK_GRID, value_library
-from mutual.supervision.supervisor import (approach_scenes, intervention_states, NoisySupervisor, read_interventions, validate_interventions, write_interventions)
-from mutual.supervision.fit import fit_supervisor, gaussian_mle
+from mutual.supervision.supervisor import (NoisySupervisor, approach_scenes, intervention_states, read_interventions,
+                                           validate_interventions, write_interventions)
+from mutual.supervision.fit import LibraryEdgeWarning, fit_supervisor, gaussian_mle, recovery_study
+from mutual.supervision.supervisor import collect_interventions
 from mutual.supervision.control import filter_control, safety_controller, simulate_filtered
 
 W_MAXES = 0.25 * np.arange(1, 13)
@@ -69,7 +73,8 @@ def test_map_prior_excludes_agile_members_and_clips_mu(library):
     states = _interventions(library, 2.0, -0.1, 0.02, 40, seed=0)
     mle = fit_supervisor(library, states)
     assert mle.w_max > 1.0 and mle.mu < 0
-    fit = fit_supervisor(library, states, prior="map")
+    with pytest.warns(LibraryEdgeWarning, match="MAP prior's support"):
+        fit = fit_supervisor(library, states, prior="map")
     assert np.array_equal(fit.admissible, W_MAXES <= 1.0)
     assert fit.w_max <= 1.0 and fit.mu >= 0
     assert np.all(np.isneginf(fit.logliks[~fit.admissible]))
@@ -147,19 +152,95 @@ def test_interventions_csv_round_trip_and_validation(tmp_path):
     assert list(back.columns) == ["participant", "trial", "time", "x", "y", "theta", "obstacle_x", "obstacle_y"]
     assert back["theta"].between(-np.pi, np.pi).all()
     assert np.allclose(intervention_states(back)[0], [-4.0, 0.5, 0.1])
-    for broken, match in [(frame.drop(columns="theta"), "lack"), (frame.assign(extra=1), "unknown"),
-                          (frame.assign(trial=[0, 1.5, 2]), "trial"), (frame.assign(x=[0, np.nan, 1]), "'x'"),
+    for broken, match in [(frame.drop(columns="theta"), "missing column .theta."), (frame.assign(extra=1), "unknown"),
+                          (frame.assign(trial=[0, 1.5, 2]), "trial"),
+                          (frame.assign(x=[0, np.nan, 1]), "row 1, column 'x': is empty"),
                           (frame.assign(time=[-1, 0, 0]), "time")]:
         with pytest.raises(ValueError, match=match):
             validate_interventions(broken)
 
 
-def test_notebook_recovers_the_supervisor(executed_notebook):
+def _no_warning(func, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return func(*args, **kwargs)
+
+
+def test_a_fit_beyond_the_library_says_it_sits_on_the_edge(library):
+    """Issue 13: a supervisor more agile (or slower) than every member is fitted to the library's edge,
+    with a warning and ``fit.boundary`` -- and an interior fit says nothing."""
+    inner = value_library([0.5, 0.75, 1.0, 1.25, 1.5], RADIUS, QUICK_GRID, progress=False)
+    agile = _interventions(library, 3.0, 0.5, 0.02, 40, seed=0)
+    with pytest.warns(LibraryEdgeWarning, match=r"most agile member of the library \(w_max = 1.5"):
+        fit = fit_supervisor(inner, agile)
+    assert fit.boundary == "highest" and fit.w_max == 1.5
+    slow = _interventions(library, 0.25, 0.5, 0.02, 40, seed=1)
+    with pytest.warns(LibraryEdgeWarning, match="slowest-turning member"):
+        assert fit_supervisor(inner, slow).boundary == "lowest"
+    inside = _no_warning(fit_supervisor, inner, _interventions(library, 1.0, 0.5, 0.02, 40, seed=2))
+    assert inside.boundary is None and inside.w_max == 1.0
+    single = value_library([1.0], RADIUS, QUICK_GRID, progress=False)
+    with pytest.warns(LibraryEdgeWarning, match="only member"):
+        assert fit_supervisor(single, agile).boundary == "only"
+
+
+def test_recovery_study_records_the_edge_instead_of_warning(library):
+    inner = value_library([0.5, 0.75, 1.0], RADIUS, QUICK_GRID, progress=False)
+    table = _no_warning(recovery_study, inner, [(1.0, 0.5, 0.02), (0.5, 0.5, 0.02)], [5, 10], [0, 1], 7.5)
+    assert len(table) == 8
+    assert set(table.loc[table["w_max"] == 1.0, "boundary"]) == {"highest"}
+    assert (table.loc[table["boundary"] == "", "w_max_hat"] == 0.75).all()
+
+
+def test_collect_interventions_returns_exactly_n_and_stops_when_the_supervisor_never_intervenes(library):
+    sup = NoisySupervisor(library[library.index_of(1.0)], 0.5, 0.1)
+    states = collect_interventions(sup, 25, np.random.default_rng(0), 7.5)
+    assert states.shape == (25, 3)
+    assert np.allclose(sup.value_fn.interp(states).mean(), 0.5, atol=0.1)
+    never = NoisySupervisor(library[library.index_of(1.0)], -5.0, 0.0)
+    with pytest.raises(ValueError, match="intervened only 0 times in 100 scenes"):
+        collect_interventions(never, 2, np.random.default_rng(0), 7.5)
+
+
+def test_fit_and_supervisor_print_short_summaries(library):
+    fit = fit_supervisor(library, _interventions(library, 0.75, 0.5, 0.05, 40, seed=1))
+    text = repr(fit)
+    for word in ["w_max=0.75", "mu=", "sigma=", "n=40", "prior='mle'", "mu+2sigma=", "12 members", "boundary=None"]:
+        assert word in text, (word, text)
+    assert len(text) < 300 and "array" not in text
+    assert fit.logliks.shape == (12,) and fit.library is library  # the full data stays available
+    sup = NoisySupervisor(library[1], 0.5, 0.1)
+    assert repr(sup).startswith("NoisySupervisor(w_max=0.5, mu=0.5, sigma=0.1;") and len(repr(sup)) < 200
+    controller = safety_controller(library[1], 0.6, u_max=1.0)
+    assert "alpha=0.6" in repr(controller) and len(repr(controller)) < 200
+
+
+def test_interventions_file_errors_name_the_file_row_and_column(tmp_path):
+    path = tmp_path / "mine.csv"
+    path.write_text("participant,trial,time,x,y,theta\nP01,0,1.0,-3,0.5,0.1\n\nP01,1,1.5,-2,oops,0.1\n")
+    with pytest.raises(ValueError) as err:
+        read_interventions(path)
+    message = str(err.value)
+    assert str(path) in message and "row 2 (line 4 of the file)" in message and "column 'y'" in message
+    assert "'oops'" in message
+
+
+def test_notebook_reports_every_chapter_4_claim_with_its_computation(executed_notebook):
+    from mutual.compendium.claims import load_claims
+
     results = executed_notebook("03_hji_safe_sets")
+    claims = load_claims()
+    expected = set(claims.loc[claims["chapter"] == "4", "id"])
+    assert set(results) == expected
+    for key, entry in results.items():
+        assert entry["computed_by"].startswith("mutual.supervision."), key
+        assert "notebook 03" in entry["note"], key
     values = {k: v["value"] for k, v in results.items()}
-    assert values, "the notebook wrote no results"
-    for key, value in values.items():
-        if isinstance(value, bool):
-            assert value, key
-    assert abs(values["c4-fit-recovers-wmax"] - 0.75) <= 0.25
+    # checks of the estimator and the library that hold on the quick grid too
+    for key in ("c4-keepout-in-reachable", "c4-library-nested", "c4-conservative-supervisor-nesting",
+                "c4-mle-mean-variance", "c4-map-mu-clipped"):
+        assert values[key] is True, key
+    assert values["c4-fig43-fit-wmax"] in list(0.25 * np.arange(1, 13))
     assert values["c4-alpha-2sigma-avoids-97pct"] > 0.95
+    assert 0 <= values["c4-property-no-false-positives"] <= 1 and 0 <= values["c4-noisy-fp-at-mu"] <= 1
+    assert values["c4-value-converges"] < 0.01

@@ -8,8 +8,11 @@ from mutual.study.data import validate_trials
 from mutual.study.design import TREATMENTS
 from mutual.supervision.supervisor import NoisySupervisor
 from mutual.supervision.fit import fit_supervisor
-from mutual.study.cohort import fraction_inside, phase2_interventions, predicted_and_observed, simulate_study, study_value_functions
-from mutual.study.teaming import Team, TeamingConfig, simulate_teaming
+from mutual.study.cohort import (avoidance_onset, fraction_inside, phase2_interventions, predicted_and_observed,
+                                 simulate_study, study_value_functions)
+from mutual.study.misalignment import straight_approach_starts, supervised_approaches
+from mutual.study.teaming import Team, TeamingConfig, _Stack, simulate_teaming
+from mutual.supervision.dubins import unsafe_reach
 
 
 @pytest.fixture(scope="module")
@@ -107,4 +110,59 @@ def test_notebook_results(executed_notebook):
     assert res["c5-tukey-learned-standard-p-from-table"]["value"] == pytest.approx(0.0328, abs=0.002)
     assert res["c5-learned-half-in-safe-set"]["simulated"]
     assert 0.3 < res["c5-learned-half-in-safe-set"]["value"] < 0.7
-    assert res["c5-detection-probability"]["value"] == pytest.approx(0.8, abs=0.05)
+    assert "c5-detection-probability" not in res                      # an echo of a setting, not a claim
+    assert all(entry["computed_by"].startswith("mutual.") and entry["note"] for entry in res.values())
+    assert res["c5-table51-predicted-learned-arith"]["value"] == pytest.approx(220 / 397)
+
+
+def test_stacked_interpolation_equals_each_value_function(functions):
+    library, conservative = functions
+    fns = [library[0], library[4], conservative]
+    which = np.array([2, 0, 1, 0])
+    rng = np.random.default_rng(3)
+    states = np.concatenate([rng.uniform(-10, 10, (4, 5, 7, 2)), rng.uniform(-7, 7, (4, 5, 7, 1))], axis=-1)
+    stack = _Stack(fns, which, "test")
+    got = stack.interp(states)
+    slope = stack.interp(states, fill_value=0.0, derivative=True)
+    for b, g in enumerate(which):
+        flat = states[b].reshape(-1, 3)
+        assert np.allclose(got[b].ravel(), fns[g].interp(flat, fill_value=np.inf), equal_nan=False)
+        assert np.allclose(slope[b].ravel(), fns[g].interp_dtheta(flat, fill_value=0.0))
+
+
+def test_study_repr_is_short(functions):
+    library, conservative = functions
+    study = simulate_study(library, conservative, n_scenes=10, config=TeamingConfig(duration=5), seed=0,
+                           kinds=("standard-like", "gradual"))
+    text = repr(study)
+    assert text.startswith("Study(SIMULATED 2 recruits") and len(text) < 400
+    assert "Team(safe set V >= 0.5" in repr(Team(library[0], 0.5))
+
+
+def test_onsets_match_the_closed_form_of_eq_5_1(functions):
+    library, conservative = functions
+    cell = library.grid_spec.spacings[0]
+    assert avoidance_onset(_member(library, 1.0)) == pytest.approx(unsafe_reach(1.0, 1.0), abs=cell / 2)
+    assert avoidance_onset(conservative) == pytest.approx(unsafe_reach(1.0, 2.0), abs=cell / 2)
+    assert avoidance_onset(_member(library, 0.5)) == pytest.approx(unsafe_reach(0.5, 1.0), abs=cell / 2)
+
+
+def test_following_the_supervisors_set_removes_false_alarms(functions):
+    # Fig. 5.1: a supervisor with a gentler internal model alarms at every late (Standard) turn; robots that avoid
+    # at alpha = mu + 2 sigma of the supervisor's own set draw (almost) no alarms, at alpha = mu about half
+    library, _ = functions
+    sup = NoisySupervisor(_member(library, 0.5), 0.3, 0.05)
+    starts = straight_approach_starts(60, np.random.default_rng(0))
+    share = {a: supervised_approaches(v, a, sup, starts, np.random.default_rng(1))["intervened"].mean()
+             for v, a in [(_member(library, 1.0), 0.0), (sup.value_fn, 0.3), (sup.value_fn, 0.4)]}
+    ignoring, at_mu, at_2sigma = share.values()
+    assert ignoring == 1.0
+    assert 0.25 < at_mu < 0.75
+    assert at_2sigma <= 0.1
+
+
+def test_record_repr_is_short(functions):
+    library, _ = functions
+    sup = NoisySupervisor(_member(library, 1.0), 0.2, 0.05)
+    _, record = simulate_teaming([Team(_member(library, 1.0))], [sup], [1], TeamingConfig(duration=2.0), record=0)
+    assert repr(record).startswith("TeamingRecord(") and len(repr(record)) < 120

@@ -20,6 +20,9 @@ Columns: ``id`` (``c<chapter>-<slug>``), ``chapter``, ``section``, ``statement``
 False), ``range`` (undetermined rows) or ``none`` (original-data rows).
 """
 
+import math
+import re
+
 import pandas as pd
 
 from . import paths
@@ -28,6 +31,7 @@ COLUMNS = ["id", "chapter", "section", "statement", "thesis_value", "compare", "
 BASES = ("computed", "thesis-numbers", "undetermined", "original-data")
 VERDICTS = ("reproduced", "consistent", "differs", "undetermined", "not reproducible without the original data",
             "pending")
+_SHARE = re.compile(r"\b(p|p-value|probability|probabilities|rate|fraction|share|proportion)\b|%", re.I)
 _RULES = {"computed": ("abs", "rel", ">=", "<=", "true"), "thesis-numbers": ("abs", "rel", ">=", "<=", "true"),
           "undetermined": ("range",), "original-data": ("none",)}
 
@@ -97,3 +101,30 @@ def verdict(claim, got):
     if not ok:
         return "differs"
     return "reproduced" if basis == "computed" else "consistent"
+
+
+def rule_problems(claim):
+    """Why the claim's comparison rule could not fail, as far as the table shows (issue 10):
+    a tolerance as wide as the thesis value itself (``abs``) or 100% (``rel``), an infinite bound,
+    ``>=`` a non-positive number (any count, distance, time or probability passes), ``<=`` 1 or
+    more on a probability or share. Returns a list of sentences, empty when none applies."""
+    kind, tol = _parse_rule(claim)
+    if kind not in ("abs", "rel", ">=", "<="):
+        return []
+    try:
+        thesis = float(claim["thesis_value"])
+    except ValueError:
+        return [f"rule {claim['compare']!r} needs a numeric thesis value, got {claim['thesis_value']!r}"]
+    if not math.isfinite(thesis):
+        return [f"the bound {claim['thesis_value']} is infinite: any value satisfies it"]
+    problems = []
+    if kind == "abs" and thesis != 0 and tol >= abs(thesis):
+        problems.append(f"tolerance abs:{tol:g} is as wide as the thesis value {thesis:g} itself")
+    if kind == "rel" and tol >= 1:
+        problems.append(f"tolerance rel:{tol:g} accepts anything from 0 to {1 + tol:g} times the thesis value")
+    if kind == ">=" and thesis <= 0:
+        problems.append(f"'>= {thesis:g}' holds for any non-negative quantity; compute the strict comparison "
+                        "and report it with rule 'true' if the quantity can be negative")
+    if kind == "<=" and thesis >= 1 and _SHARE.search(claim["statement"]):
+        problems.append(f"'<= {thesis:g}' holds for any probability or share")
+    return problems

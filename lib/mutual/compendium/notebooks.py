@@ -1,25 +1,57 @@
-"""Run the compendium's notebooks: papermill for ``make figures``, nbclient for
-the tests (``python -m mutual.compendium.notebooks [--quick] NOTEBOOK...``).
+"""Run the compendium's notebooks, for ``make figures`` and the tests alike::
 
-Every notebook has exactly one cell tagged ``parameters`` that declares
-``quick``; a run that passes a parameter the notebook does not declare, or a
-notebook that raises, stops with a message naming the notebook and the cell.
+    python -m mutual.compendium.notebooks [--quick] [-p NAME=VALUE ...] [--output DIR] NOTEBOOK...
+
+* Every notebook has exactly one cell tagged ``parameters`` that declares ``quick``; a parameter
+  the notebook does not declare is refused.
+* Outputs go to ``--output`` (default ``$MUTUAL_OUTPUT_DIR``, else the scratch folder
+  ``build/scratch``). Only a full run may write the committed ``figures/`` (``make figures``
+  passes ``--output figures``); a quick run or one with other parameters there is refused.
+* A notebook's previous results are deleted before it runs, so a notebook that fails leaves
+  none for the report to use; the results record the run (:mod:`.runs`).
+* A notebook that raises, a kernel that dies, a cell that times out, a missing notebook: one line
+  naming the notebook and the cell (the executed copy keeps the traceback).
+* SIGINT and SIGTERM interrupt the running cell (so its atomic writes clean up after themselves),
+  shut the kernel down, remove temporary files a killed kernel left behind, and stop with one line.
+* Kernels run with ``TQDM_DISABLE=1``: no progress bars in the executed notebooks.
 """
 
 import argparse
+import ast
+import asyncio
+import os
+import re
+import signal
 import sys
+import threading
+import time
 from pathlib import Path
 
 import nbformat
 
-from .paths import BUILD, NOTEBOOKS
+from ..atomic import write_text
+from . import paths as _paths
+from .paths import OUTPUT_ENV, executed_dir, figures_dir, generated_data_dir, is_committed, results_dir
+from .runs import kernel_env, run_mode, shown
 
 KERNEL = "mutual"
-CELL_TIMEOUT = 1800  # seconds per cell
+CELL_TIMEOUT = 1800      # seconds per cell
+INTERRUPT_GRACE = 10     # seconds an interrupted kernel gets to unwind its cell before it is killed
+KERNEL_ENV = {"TQDM_DISABLE": "1", "PYDEVD_DISABLE_FILE_VALIDATION": "1"}
+KERNEL_START = ["--IPKernelApp.exec_lines=import mutual.compendium.runs as _runs; _runs.quiet_progress_bars(); del _runs"]
+_TEMPORARY = re.compile(r"^\..+\.[a-z0-9_]{8}(\.[A-Za-z0-9]+)?$")  # mutual.atomic's temporary files
 
 
 class NotebookError(RuntimeError):
     """A notebook failed to run; the message names the notebook and the cell."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """The run was stopped by SIGINT or SIGTERM; ``signum`` says which."""
+
+    def __init__(self, message, signum):
+        super().__init__(message)
+        self.signum = signum
 
 
 def declared_parameters(path):
@@ -37,57 +69,219 @@ def declared_parameters(path):
     return declared
 
 
-def _check_parameters(path, parameters):
-    declared = declared_parameters(path)
-    unknown = sorted(set(parameters) - set(declared))
-    if unknown:
-        raise ValueError(f"{Path(path).name}: no parameter named {', '.join(map(repr, unknown))} "
-                         f"(its parameters cell declares {', '.join(declared)})")
-
-
-def _cell_label(path, source):
-    """'code cell N (first line)' for the cell of ``path`` whose source is ``source``."""
-    cells = [c.source for c in nbformat.read(path, as_version=4).cells if c.cell_type == "code"]
-    number = cells.index(source) + 1 if source in cells else "?"
-    first = source.strip().splitlines()[0] if source.strip() else ""
-    return f"code cell {number} ({first[:60]!r})"
-
-
-def run_papermill(path, output, parameters=None):
-    """Execute ``path`` with papermill into ``output`` (the ``make figures`` path)."""
-    import papermill
-    from papermill.exceptions import PapermillExecutionError
-
-    parameters = dict(parameters or {})
-    _check_parameters(path, parameters)
-    Path(output).parent.mkdir(parents=True, exist_ok=True)
-    try:
-        papermill.execute_notebook(str(path), str(output), parameters=parameters, kernel_name=KERNEL,
-                                   execution_timeout=CELL_TIMEOUT, cwd=str(NOTEBOOKS), progress_bar=True)
-    except PapermillExecutionError as err:
-        raise NotebookError(f"notebook {Path(path).name} failed in {_cell_label(path, err.source)}: "
-                            f"{err.ename}: {err.evalue}") from None
-
-
-def execute(path, parameters=None, timeout=600):
-    """Execute ``path`` in a fresh kernel with nbclient (the tests' path); return the notebook."""
-    from nbclient import NotebookClient
-    from nbclient.exceptions import CellExecutionError
+def _prepared(path, parameters):
+    """The notebook with ``parameters`` injected after its parameters cell (papermill's way)."""
     from papermill.iorw import load_notebook_node
     from papermill.parameterize import parameterize_notebook
 
-    parameters = dict(parameters or {})
-    _check_parameters(path, parameters)
-    nb = parameterize_notebook(load_notebook_node(str(path)), parameters, kernel_name=KERNEL)
-    client = NotebookClient(nb, kernel_name=KERNEL, timeout=timeout,
-                            resources={"metadata": {"path": str(NOTEBOOKS)}})
+    declared = declared_parameters(path)
+    unknown = sorted(set(parameters) - set(declared))
+    if unknown:
+        raise ValueError(f"{path.name}: no parameter named {', '.join(map(repr, unknown))} "
+                         f"(its parameters cell declares {', '.join(declared)})")
+    if not parameters:
+        return nbformat.read(path, as_version=4)
+    return parameterize_notebook(load_notebook_node(str(path)), parameters, kernel_name=KERNEL)
+
+
+def _cell_label(nb, index):
+    """'code cell N (first line)', numbering the notebook's own code cells (not the injected one)."""
+    if index is None:
+        return "kernel start-up"
+    cell = nb.cells[index]
+    if "injected-parameters" in cell.metadata.get("tags", []):
+        return "the injected parameters cell"
+    number = sum(c.cell_type == "code" and "injected-parameters" not in c.metadata.get("tags", [])
+                 for c in nb.cells[:index + 1])
+    first = cell.source.strip().splitlines()[0] if cell.source.strip() else ""
+    return f"code cell {number} ({first[:60]!r})"
+
+
+def committed_files():
+    """``{path: (mtime, size)}`` of the committed outputs (``figures/`` and ``data/``), to tell whether a
+    run that must not write them did."""
+    found = {}
+    for folder in (_paths.FIGURES, _paths.DATA):
+        for path in (folder.rglob("*") if folder.is_dir() else []):
+            if path.is_file():
+                stat = path.stat()
+                found[path] = (stat.st_mtime_ns, stat.st_size)
+    return found
+
+
+def temporaries(since):
+    """Temporary files of :mod:`mutual.atomic` created since ``since`` (a time) in the output folders."""
+    found = []
+    for folder in {figures_dir().resolve(), generated_data_dir().resolve()}:
+        if folder.is_dir():
+            found += [p for p in folder.rglob(".*") if p.is_file() and _TEMPORARY.match(p.name)
+                      and p.stat().st_mtime >= since - 1]
+    return sorted(found)
+
+
+class _Run:
+    """One kernel executing one notebook, and what happened to it."""
+
+    def __init__(self, nb, path, timeout, env, loop, log):
+        self.nb, self.path, self.timeout, self.env, self.loop, self.log = nb, path, timeout, env, loop, log
+        self.km = self.client = self.task = self.watchdog = None
+        self.cell = self.signum = self.exit_status = None
+        self.killed = False
+
+    async def cells(self):
+        from jupyter_client.manager import AsyncKernelManager
+        from nbclient import NotebookClient
+        from nbclient.util import ensure_async
+
+        self.km = AsyncKernelManager(kernel_name=KERNEL)
+        self.client = NotebookClient(self.nb, km=self.km, kernel_name=KERNEL, timeout=self.timeout,
+                                     extra_arguments=list(KERNEL_START),
+                                     resources={"metadata": {"path": str(self.path.parent)}})
+        await self.client.async_start_new_kernel(env=self.env, stdout=self.log, stderr=self.log)
+        await self.client.async_start_new_kernel_client()
+        info = await self.client.async_wait_for_reply(await ensure_async(self.client.kc.kernel_info()))
+        if info is not None and "language_info" in info["content"]:
+            self.nb.metadata["language_info"] = info["content"]["language_info"]
+        for index, cell in enumerate(self.nb.cells):
+            if self.signum is not None:
+                raise asyncio.CancelledError
+            self.cell = index
+            await self.client.async_execute_cell(cell, index, execution_count=self.client.code_cells_executed + 1)
+        self.cell = None
+        self.client.set_widgets_metadata()
+
+    def on_signal(self, signum):
+        """First signal: interrupt the running cell, and kill the kernel if it has not stopped within
+        ``INTERRUPT_GRACE`` seconds. A second signal kills it at once."""
+        first = self.signum is None
+        self.signum = self.signum or signum
+        if first and self.km is not None and self.km.has_kernel:
+            self.watchdog = self.loop.create_task(self._interrupt())
+        else:
+            self.stop_now()
+
+    def stop_now(self):
+        self.killed = True
+        if self.task is not None:
+            self.task.cancel()
+
+    async def _interrupt(self):
+        try:
+            await self.km.interrupt_kernel()
+        except Exception:  # noqa: BLE001 (the kernel may already be gone; stop_now follows)
+            pass
+        await asyncio.sleep(INTERRUPT_GRACE)
+        self.stop_now()
+
+    async def shutdown(self):
+        if self.watchdog is not None:
+            self.watchdog.cancel()
+        if self.km is None:
+            return
+        try:
+            self.exit_status = await self.km.provisioner.poll() if self.km.provisioner else None
+        except Exception:  # noqa: BLE001
+            self.exit_status = None
+        if self.client is not None and self.client.kc is not None:
+            self.client.kc.stop_channels()
+        try:
+            if self.km.has_kernel:
+                await self.km.shutdown_kernel(now=self.killed or self.exit_status is not None)
+        except Exception:  # noqa: BLE001 (a dead kernel's resources are released either way)
+            pass
+
+
+def _signal_handlers(run):
+    """Route SIGINT and SIGTERM to ``run`` while it executes; returns a function that restores
+    the previous handlers (only the main thread can set them)."""
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    signals = (signal.SIGINT, signal.SIGTERM)
+    old = {s: signal.getsignal(s) for s in signals}
+    for s in signals:
+        signal.signal(s, lambda signum, frame: run.loop.call_soon_threadsafe(run.on_signal, signum))
+    return lambda: [signal.signal(s, h) for s, h in old.items()]
+
+
+def _kernel_death(run):
+    status = run.exit_status
+    if isinstance(status, int) and status < 0:
+        return f"killed by {signal.Signals(-status).name}"
+    return f"exit status {status}" if status is not None else "no exit status"
+
+
+def execute(path, parameters=None, timeout=CELL_TIMEOUT, env=None):
+    """Execute the notebook ``path`` in a fresh ``mutual`` kernel with ``parameters`` overridden and
+    return the executed notebook; its copy goes to :func:`~.paths.executed_dir`.
+
+    Raises :class:`NotebookError` (naming the notebook and the cell) when a cell raises or times
+    out or the kernel dies, ValueError for undeclared parameters, and :class:`Interrupted` on
+    SIGINT/SIGTERM. ``env`` adds environment variables for the kernel.
+    """
+    from jupyter_core.utils import ensure_event_loop
+    from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
+
+    path, parameters = Path(path), dict(parameters or {})
+    if not path.is_file():
+        raise NotebookError(f"no notebook at {shown(path)}")
+    mode = run_mode(parameters)
+    if is_committed() and mode != "full":
+        raise NotebookError(f"{path.name}: a {mode} run never writes the committed figures/ (only `make figures` "
+                            "does); leave the output folder at its default, build/scratch")
+    nb = _prepared(path, parameters)
+    results = (results_dir() / f"{path.stem}.json", results_dir() / "extensions" / f"{path.stem}.json")
+    for stale in results:
+        stale.unlink(missing_ok=True)
+    kernel = {**os.environ, **KERNEL_ENV, OUTPUT_ENV: str(figures_dir().resolve()), **kernel_env(path, parameters),
+              **(env or {})}
+    guarded = None if is_committed() else committed_files()
+    loop = ensure_event_loop()
+    log_path = executed_dir() / f"{path.stem}.kernel.log"
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    log = open(log_path, "w")  # the kernel process's own messages (cell output goes to the notebook)
+    run = _Run(nb, path, timeout, kernel, loop, log)
+    restore = _signal_handlers(run)
+    started, error = time.time(), None
     try:
-        client.execute()
+        run.task = loop.create_task(run.cells())
+        loop.run_until_complete(run.task)
     except CellExecutionError as err:
-        failing = next((c.source for c in nb.cells if c.cell_type == "code"
-                        and any(o.get("output_type") == "error" for o in c.get("outputs", []))), "")
-        raise NotebookError(f"notebook {Path(path).name} failed in {_cell_label(path, failing)}: "
-                            f"{err.ename}: {err.evalue}") from None
+        error = f"{err.ename}: {err.evalue}"
+    except CellTimeoutError:
+        error = f"timed out after {timeout} s"
+    except DeadKernelError:
+        error = "the kernel died"
+    except asyncio.CancelledError:
+        error = "stopped"
+    except Exception as err:  # noqa: BLE001 (kernel start-up: no such kernel, a port clash)
+        error = f"{type(err).__name__}: {err}"
+    finally:
+        loop.run_until_complete(run.shutdown())
+        log.close()
+        restore()
+        removed = temporaries(started) if (run.signum or run.killed or run.exit_status is not None) else []
+        for leftover in removed:
+            leftover.unlink(missing_ok=True)
+        write_text(executed_dir() / path.name, nbformat.writes(nb))
+    if run.signum is not None or error:  # results of a run that did not finish are not results
+        for partial in results:
+            partial.unlink(missing_ok=True)
+    where = f"notebook {path.name}, {_cell_label(nb, run.cell)}"
+    cleaned = f"; removed {len(removed)} temporary file(s) the kernel left" if removed else ""
+    if run.signum is not None:
+        raise Interrupted(f"stopped by {signal.Signals(run.signum).name} in {where}; it left no results{cleaned}",
+                          run.signum)
+    if error == "the kernel died" or (error and run.exit_status is not None):
+        raise NotebookError(f"{where}: the kernel died ({_kernel_death(run)}; its log: {shown(log_path)}){cleaned}")
+    if error:
+        raise NotebookError(f"notebook {path.name} failed in {_cell_label(nb, run.cell)}: {error}")
+    if guarded is not None:
+        after = committed_files()
+        touched = sorted(shown(f) for f in set(guarded) | set(after) if guarded.get(f) != after.get(f))
+        if touched:
+            raise NotebookError(f"notebook {path.name} wrote the committed {', '.join(touched[:5])}"
+                                f"{' ...' if len(touched) > 5 else ''} in a {mode} run (outputs go to "
+                                f"{shown(figures_dir())}): write through figures_dir() and generated_data_dir()")
     return nb
 
 
@@ -97,18 +291,55 @@ def ordered(paths):
     return [p for p in paths if not p.name.startswith("00_")] + [p for p in paths if p.name.startswith("00_")]
 
 
+def _parameter(text):
+    name, sep, value = text.partition("=")
+    if not sep or not name.isidentifier():
+        raise argparse.ArgumentTypeError(f"{text!r}: write NAME=VALUE, e.g. -p n_demos=50")
+    try:
+        return name, ast.literal_eval(value)
+    except (ValueError, SyntaxError):
+        return name, value
+
+
+def _stop(signum, frame):
+    raise Interrupted(f"stopped by {signal.Signals(signum).name} between notebooks", signum)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("notebooks", nargs="+", type=Path)
-    parser.add_argument("--quick", action="store_true", help="small, fast parameters (as in CI)")
+    parser.add_argument("--quick", action="store_true", help="small, fast parameters (as in the tests)")
+    parser.add_argument("-p", "--parameter", type=_parameter, action="append", default=[], metavar="NAME=VALUE",
+                        help="override a parameter of the notebooks' parameters cell (a Python literal)")
+    parser.add_argument("--output", type=Path, help="output folder (default: $MUTUAL_OUTPUT_DIR, else build/scratch; "
+                                                    "`make figures` passes figures)")
     args = parser.parse_args(argv)
+    if args.output:
+        os.environ[OUTPUT_ENV] = str(args.output.resolve())
+    parameters = ({"quick": True} if args.quick else {}) | dict(args.parameter)
     todo = ordered(args.notebooks)
-    for i, path in enumerate(todo, 1):
-        print(f"==> [{i}/{len(todo)}] running {path.name}" + (" (quick)" if args.quick else ""), flush=True)
-        try:
-            run_papermill(path, BUILD / path.name, {"quick": True} if args.quick else {})
-        except (NotebookError, ValueError) as err:
-            sys.exit(f"make figures: {err}")
+    signal.signal(signal.SIGTERM, _stop)
+    try:
+        missing = [p for p in todo if not p.is_file()]
+        if missing:
+            raise NotebookError(f"no notebook at {', '.join(shown(p) for p in missing)}")
+        if is_committed() and run_mode(parameters) != "full":
+            raise NotebookError("quick runs and runs with other parameters never write the committed figures/ "
+                                "(only `make figures` does): leave the output folder at its default, build/scratch")
+        print(f"==> {run_mode(parameters)} run, outputs to {shown(figures_dir())}", flush=True)
+        for i, path in enumerate(todo, 1):
+            print(f"==> [{i}/{len(todo)}] {path.name}", flush=True)
+            start = time.time()
+            execute(path, parameters)
+            print(f"    done in {time.time() - start:.0f} s", flush=True)
+    except Interrupted as err:
+        print(f"notebook runner: {err}", file=sys.stderr)
+        sys.exit(128 + err.signum)
+    except KeyboardInterrupt:
+        print("notebook runner: stopped by SIGINT between notebooks", file=sys.stderr)
+        sys.exit(128 + signal.SIGINT)
+    except (NotebookError, ValueError) as err:
+        sys.exit(f"notebook runner: {err}")
 
 
 if __name__ == "__main__":

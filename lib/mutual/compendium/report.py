@@ -1,36 +1,67 @@
-"""Build ``figures/REPRODUCTION.md``: every claim of the thesis beside the value
-this code reproduces, with a verdict (``python -m mutual.compendium.report``)."""
+"""Build ``REPRODUCTION.md``: every claim of the thesis beside the value this code reproduces,
+with a verdict (``python -m mutual.compendium.report [--output DIR] [--readme README.md]``).
 
+The report refuses (a :class:`~mutual.compendium.runs.StaleResults` error naming the notebook;
+non-zero exit) results older than their notebook, results whose notebook is gone and, when it
+writes the committed ``figures/REPRODUCTION.md``, results of quick or custom runs.
+"""
+
+import argparse
 import json
+import os
+import re
 import sys
+from pathlib import Path
 
 import pandas as pd
 
 from ..atomic import write_text
 from .claims import VERDICTS, load_claims, verdict
-from .paths import figures_dir, results_dir
+from .paths import OUTPUT_ENV, figures_dir, is_committed, results_dir
+from .runs import check_record, shown
+
+README_BEGIN = "<!-- verdict counts: written by `make figures` from figures/REPRODUCTION.md; a test checks they agree -->"
+README_END = "<!-- /verdict counts -->"
+_COUNT = re.compile(r"(\d+) (" + "|".join(map(re.escape, VERDICTS)) + r")\b")
 
 
-def load_results():
-    """Map claim id -> result entry (value, simulated, note, notebook) from every results file."""
+def _documents(folder, kind):
+    """``(path, doc)`` of every results file in ``folder`` (``kind``: ``claims`` or ``extensions``),
+    each checked against its notebook (:func:`~mutual.compendium.runs.check_record`)."""
+    committed = is_committed()
+    docs = []
+    for path in sorted(Path(folder).glob("*.json")):
+        label = shown(path)
+        try:
+            doc = json.loads(path.read_text())
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{label}: not a results file ({err})") from None
+        if kind not in doc:
+            raise ValueError(f"{label}: not a results file (no {kind!r})")
+        doc["run"] = check_record(doc, label, committed)
+        docs.append((path, doc))
+    return docs
+
+
+def load_results(folder=None):
+    """Map claim id -> result entry (value, simulated, note, computed_by, notebook, mode) from every
+    results file in ``folder`` (default: the output folder's ``results/``)."""
     found = {}
     known = set(load_claims()["id"])
-    for path in sorted(results_dir().glob("*.json")):
-        doc = json.loads(path.read_text())
+    for path, doc in _documents(folder or results_dir(), "claims"):
         for cid, entry in doc["claims"].items():
             if cid not in known:
                 raise ValueError(f"{path.name}: unknown claim id {cid!r} (not in data/paper_claims.csv)")
             if cid in found:
                 raise ValueError(f"{path.name}: claim {cid!r} already reported by {found[cid]['notebook']}")
-            found[cid] = dict(entry, notebook=doc["notebook"])
+            found[cid] = dict(entry, notebook=doc["notebook"], mode=doc["run"]["mode"])
     return found
 
 
-def extensions_table():
-    """One row per number of an extension beyond the thesis (``figures/results/extensions/``)."""
+def extensions_table(folder=None):
+    """One row per number of an extension beyond the thesis (``results/extensions/``)."""
     rows = []
-    for path in sorted((results_dir() / "extensions").glob("*.json")):
-        doc = json.loads(path.read_text())
+    for path, doc in _documents(Path(folder or results_dir()) / "extensions", "extensions"):
         for key, e in doc["extensions"].items():
             rows.append({"notebook": doc["notebook"], "key": key, "measured": e["statement"], "value": _show(e["value"]),
                          "simulated": "yes" if e["simulated"] else "no", "computed by": e["computed_by"],
@@ -52,10 +83,10 @@ def _cell(text):
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
-def report_table():
+def report_table(folder=None):
     """One row per claim: the thesis value, the reproduced value and the verdict."""
     claims = load_claims()
-    results = load_results()
+    results = load_results(folder)
     rows = []
     for claim in claims.to_dict("records"):
         entry = results.get(claim["id"])
@@ -66,14 +97,48 @@ def report_table():
                      "reproduced": _show(got) + (f" ({note})" if note else ""),
                      "verdict": verdict(claim, got),
                      "simulated inputs": ("yes" if entry["simulated"] else "no") if entry else "",
-                     "figure": claim["figure"]})
-    return pd.DataFrame(rows)
+                     "figure": claim["figure"],
+                     "run": (f"{entry['notebook']} ({entry['mode']})" if entry else "")})
+    return pd.DataFrame(rows, columns=["id", "chapter", "section", "claim", "thesis", "reproduced", "verdict",
+                                       "simulated inputs", "figure", "run"])
 
 
-def build_report():
-    """Write the reproduction report and return its path."""
-    table = report_table()
-    counts = table["verdict"].value_counts()
+def summary_line(verdicts):
+    """``Summary: N reproduced, N consistent, ... (of N claims).`` for a column of verdicts."""
+    counts = pd.Series(verdicts).value_counts()
+    return "Summary: " + ", ".join(f"{counts.get(v, 0)} {v}" for v in VERDICTS) + f" (of {len(verdicts)} claims)."
+
+
+def summary_counts(text):
+    """``{verdict: count}`` (every category, 0 where absent) and the claim total, read from the
+    first summary line in ``text`` (a report or the README)."""
+    line = next((ln for ln in text.splitlines() if ln.startswith("Summary: ")), None)
+    if line is None:
+        raise ValueError("no 'Summary: ...' line")
+    counts = {v: 0 for v in VERDICTS}
+    counts.update({v: int(n) for n, v in _COUNT.findall(line)})
+    total = re.search(r"\(of (\d+) claims\)", line)
+    return counts, int(total.group(1)) if total else None
+
+
+def update_readme(readme, report_text):
+    """Rewrite the summary line between the README's verdict-count markers from ``report_text``."""
+    readme = Path(readme)
+    text = readme.read_text()
+    if README_BEGIN not in text or README_END not in text:
+        raise ValueError(f"{readme}: no verdict-count markers ({README_BEGIN} ... {README_END})")
+    line = next(ln for ln in report_text.splitlines() if ln.startswith("Summary: "))
+    head, rest = text.split(README_BEGIN, 1)
+    _, tail = rest.split(README_END, 1)
+    new = f"{head}{README_BEGIN}\n{line}\n{README_END}{tail}"
+    return write_text(readme, new) if new != text else readme
+
+
+def build_report(folder=None):
+    """Write the reproduction report into the output folder and return its path; results come from
+    ``folder`` (default: the output folder's ``results/``)."""
+    table = report_table(folder)
+    modes = sorted({r.split(" (")[-1].rstrip(")") for r in table["run"] if r})
     head = ["id", "section", "claim", "thesis", "reproduced", "verdict", "simulated inputs", "figure"]
     lines = [
         "# Reproduction report",
@@ -82,13 +147,24 @@ def build_report():
         "this compendium computes (`figures/results/*.json`, written by the notebooks).",
         "Regenerated by `make figures`; do not edit by hand.",
         "",
-        "Summary: " + ", ".join(f"{counts.get(v, 0)} {v}" for v in VERDICTS) + f" (of {len(table)} claims).",
+        "Verdicts: **reproduced** (our code computed it with the thesis's method and set-up, by a rule",
+        "that could fail), **consistent** (re-derived from the thesis's own reported numbers),",
+        "**differs**, **undetermined** (the thesis does not give what the number depends on: the range",
+        "over plausible choices), **not reproducible without the original data** (the thesis's human",
+        "data), **pending** (no notebook reports it yet).",
         "",
+        summary_line(table["verdict"].tolist()),
+        "",
+    ]
+    if modes and modes != ["full"]:
+        runs = sorted({r for r in table["run"] if r and not r.endswith("(full)")})
+        lines += [f"**Not the committed report**: built in `{shown(figures_dir())}` from {', '.join(runs)}.", ""]
+    lines += [
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),
     ]
     lines += ["| " + " | ".join(_cell(row[c]) for c in head) + " |" for _, row in table.iterrows()]
-    extensions = extensions_table()
+    extensions = extensions_table(folder)
     if len(extensions):
         lines += ["", "## Extensions beyond the thesis", "",
                   "Numbers of experiments the thesis does not report (its closing cycle run end to end, replication",
@@ -98,8 +174,24 @@ def build_report():
     return write_text(figures_dir() / "REPRODUCTION.md", "\n".join(lines) + "\n")
 
 
-if __name__ == "__main__":
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--output", type=Path, help="output folder (default: $MUTUAL_OUTPUT_DIR, else build/scratch)")
+    parser.add_argument("--readme", type=Path, help="README whose verdict counts to rewrite (committed report only)")
+    args = parser.parse_args(argv)
+    if args.output:
+        os.environ[OUTPUT_ENV] = str(args.output.resolve())
     try:
-        print(f"wrote {build_report()}")
+        path = build_report()
+        print(f"wrote {shown(path)}")
+        if args.readme:
+            if not is_committed():
+                raise ValueError(f"--readme: the README states the committed report's counts; "
+                                 f"{shown(path)} is not the committed figures/REPRODUCTION.md")
+            print(f"wrote {shown(update_readme(args.readme, path.read_text()))}")
     except ValueError as err:
         sys.exit(f"reproduction report: {err}")
+
+
+if __name__ == "__main__":
+    main()

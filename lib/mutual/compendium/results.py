@@ -2,10 +2,13 @@
 
 Each notebook calls :func:`write_results` once with the claims it reproduces,
 keyed by the ids of ``data/paper_claims.csv``; the file lands in
-``figures/results/<notebook-stem>.json``. Timings never go here (they belong
-to ``make bench``), so the files are identical on every rerun.
+``<output folder>/results/<notebook-stem>.json`` with a record of the run that wrote it
+(:mod:`.runs`). Every entry names the library function that computed it (``computed_by``) and
+the computation (``note``). Timings never go here (they belong to ``make bench``), so the files
+are identical on every rerun.
 """
 
+import importlib
 import json
 import math
 import numbers
@@ -15,6 +18,7 @@ import numpy as np
 from ..atomic import write_text
 from .claims import load_claims
 from .paths import results_dir
+from .runs import run_record
 
 
 def _plain(value):
@@ -35,34 +39,73 @@ def _plain(value):
     raise ValueError(f"result value {value!r} is not a number, boolean, string or list")
 
 
-def write_results(notebook, claims, simulated=False):
-    """Write ``figures/results/<notebook>.json`` from ``{claim_id: value or dict}``.
+def resolve_computed_by(name):
+    """The ``mutual`` function (or class, or method) named by the dotted ``name``; a ValueError
+    says why when it is not one (machinery in ``mutual.compendium`` computes no claim)."""
+    if not isinstance(name, str) or not name.startswith("mutual.") or name.startswith("mutual.compendium"):
+        raise ValueError(f"computed_by {name!r} must name a library function of mutual, e.g. "
+                         "'mutual.constraints.inference.greedy_inference' (not the compendium's machinery)")
+    parts = name.split(".")
+    for cut in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        try:
+            for attr in parts[cut:]:
+                obj = getattr(obj, attr)
+        except AttributeError:
+            raise ValueError(f"computed_by {name!r}: {'.'.join(parts[:cut])} has no {'.'.join(parts[cut:])}") from None
+        if not callable(obj):
+            raise ValueError(f"computed_by {name!r} is not a function or class")
+        return obj
+    raise ValueError(f"computed_by {name!r}: no importable module")
 
-    A dict entry may carry ``value``, ``simulated`` (overriding the default for
-    the whole notebook), ``note`` and ``computed_by`` (the dotted name of the library function
-    that computed the value, e.g. ``mutual.constraints.inference.greedy_inference``).
-    Unknown claim ids raise a ValueError.
+
+def _check_provenance(notebook, cid, entry):
+    """Every entry names its computation: ``computed_by`` (a mutual function) and a ``note``."""
+    for key in ("computed_by", "note"):
+        if not str(entry.get(key, "")).strip():
+            raise ValueError(f"notebook {notebook}, claim {cid!r}: the entry needs '{key}' "
+                             "(computed_by: the mutual function that computed the value; note: the computation)")
+    try:
+        resolve_computed_by(entry["computed_by"])
+    except ValueError as err:
+        raise ValueError(f"notebook {notebook}, claim {cid!r}: {err}") from None
+
+
+def write_results(notebook, claims, simulated=False):
+    """Write ``<output folder>/results/<notebook>.json`` from ``{claim_id: entry}``.
+
+    Each entry is a dict with ``value``, ``computed_by`` (the dotted name of the library function
+    that computed the value, e.g. ``mutual.constraints.inference.greedy_inference``; the notebook
+    calls it), ``note`` (the computation: what was compared, on what) and optionally ``simulated``
+    (overriding the default for the whole notebook). ``notebook`` is the notebook's file stem.
+    Unknown claim ids and entries that do not name their computation raise a ValueError.
     """
     known = set(load_claims()["id"])
     entries = {}
     for cid, entry in sorted(claims.items()):
         if cid not in known:
             raise ValueError(f"claim id {cid!r} (from notebook {notebook!r}) is not in data/paper_claims.csv")
-        entry = dict(entry) if isinstance(entry, dict) else {"value": entry}
+        if not isinstance(entry, dict):
+            raise ValueError(f"notebook {notebook}, claim {cid!r}: the entry must be a dict with 'value', "
+                             f"'computed_by' and 'note', got {entry!r}")
         unknown = set(entry) - {"value", "simulated", "note", "computed_by"}
         if unknown or "value" not in entry:
-            raise ValueError(f"claim {cid!r}: entry needs 'value' and may carry only 'simulated', 'note' and "
-                             f"'computed_by', got {sorted(entry)}")
+            raise ValueError(f"notebook {notebook}, claim {cid!r}: entry needs 'value', 'computed_by' and 'note' "
+                             f"and may carry 'simulated', got {sorted(entry)}")
+        _check_provenance(notebook, cid, entry)
         entries[cid] = {"value": _plain(entry["value"]),
                         "simulated": bool(entry.get("simulated", simulated)),
-                        "note": str(entry.get("note", "")),
-                        "computed_by": str(entry.get("computed_by", ""))}
-    text = json.dumps({"notebook": notebook, "claims": entries}, indent=1, sort_keys=True) + "\n"
-    return write_text(results_dir() / f"{notebook}.json", text)
+                        "note": str(entry["note"]),
+                        "computed_by": str(entry["computed_by"])}
+    doc = {"notebook": notebook, "run": run_record(notebook), "claims": entries}
+    return write_text(results_dir() / f"{notebook}.json", json.dumps(doc, indent=1, sort_keys=True) + "\n")
 
 
 def write_extensions(notebook, results):
-    """Write ``figures/results/extensions/<notebook>.json``: numbers of an extension beyond the
+    """Write ``<output folder>/results/extensions/<notebook>.json``: numbers of an extension beyond the
     thesis (chapter 8's cycle, replication power), shown in the report's Extensions section and
     never counted among the thesis's verdicts.
 
@@ -77,8 +120,13 @@ def write_extensions(notebook, results):
         if missing or unknown:
             raise ValueError(f"extension result {key!r}: needs 'statement', 'value' and 'computed_by' and may carry "
                              f"'note' and 'simulated' (missing {sorted(missing)}, unknown {sorted(unknown)})")
+        try:
+            resolve_computed_by(entry["computed_by"])
+        except ValueError as err:
+            raise ValueError(f"notebook {notebook}, extension result {key!r}: {err}") from None
         entries[key] = {"statement": str(entry["statement"]), "value": _plain(entry["value"]),
                         "computed_by": str(entry["computed_by"]), "note": str(entry.get("note", "")),
                         "simulated": bool(entry.get("simulated", True))}
-    text = json.dumps({"notebook": notebook, "extensions": entries}, indent=1, sort_keys=True) + "\n"
+    doc = {"notebook": notebook, "run": run_record(notebook), "extensions": entries}
+    text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
     return write_text(results_dir() / "extensions" / f"{notebook}.json", text)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .lqr import riccati_backward, solve_lq
+from .lqr import riccati_backward, solve_lq, symmetric
 
 
 @dataclass(frozen=True)
@@ -36,8 +36,18 @@ class LinearDynamics:
             raise ValueError(f"A must be (n, n) or (N, n, n), got shape {A.shape}")
         if B.ndim not in (2, 3) or B.shape[-2] != A.shape[-1]:
             raise ValueError(f"B must be (n, m) or (N, n, m) with n = {A.shape[-1]}, got shape {B.shape}")
+        if A.ndim == 3 and B.ndim == 3 and len(A) != len(B):
+            raise ValueError(f"A and B must have the same number of stages, got {len(A)} and {len(B)}")
+        for name, a in (("A", A), ("B", B)):
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"dynamics {name} contains non-finite values")
         object.__setattr__(self, "A", A)
         object.__setattr__(self, "B", B)
+
+    def __repr__(self):
+        stages = [len(a) for a in (self.A, self.B) if a.ndim == 3]
+        kind = f"time-varying, {stages[0]} stages" if stages else "time-invariant"
+        return f"LinearDynamics(n={self.n}, m={self.m}, {kind})"
 
     @property
     def n(self):
@@ -49,18 +59,35 @@ class LinearDynamics:
 
     def stages(self, start, N):
         """The dynamics of stages ``start .. start + N - 1`` (for replanning)."""
+        for a in (self.A, self.B):
+            if a.ndim == 3 and len(a) < start + N:
+                raise ValueError(f"the dynamics have {len(a)} stages; stages {start}..{start + N - 1} were asked for")
         A = self.A[start:start + N] if self.A.ndim == 3 else self.A
         B = self.B[start:start + N] if self.B.ndim == 3 else self.B
         return LinearDynamics(A, B)
 
 
+def _check_dim_dt(dim, dt):
+    if not (isinstance(dt, (int, float, np.integer, np.floating)) and np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive finite number, got {dt!r}")
+    if not isinstance(dim, (int, np.integer)) or isinstance(dim, bool) or dim < 1:
+        raise ValueError(f"dim must be a positive integer, got {dim!r}")
+
+
 def single_integrator(dim=2, dt=0.01):
     """Path-planning dynamics ``x' = u`` (eq. (6.5)), Euler-discretised: ``x_{k+1} = x_k + dt u_k``."""
-    if not dt > 0:
-        raise ValueError(f"dt must be positive, got {dt!r}")
-    if not isinstance(dim, (int, np.integer)) or dim < 1:
-        raise ValueError(f"dim must be a positive integer, got {dim!r}")
+    _check_dim_dt(dim, dt)
     return LinearDynamics(np.eye(dim), dt * np.eye(dim))
+
+
+def double_integrator(dim=2, dt=0.01):
+    """``p'' = u`` in ``dim`` dimensions, exactly discretised with zero-order hold; the state is
+    ``(p, v)`` (positions, then velocities), ``n = 2 dim`` states and ``m = dim`` controls."""
+    _check_dim_dt(dim, dt)
+    I = np.eye(dim)
+    A = np.block([[I, dt * I], [np.zeros((dim, dim)), I]])
+    B = np.vstack([0.5 * dt ** 2 * I, dt * I])
+    return LinearDynamics(A, B)
 
 
 _FIELDS = ("Q", "q", "R", "r", "QN", "qN")
@@ -94,16 +121,52 @@ class QuadraticCost:
             if a.shape[per_stage:] != shape:
                 allowed = f"{shape} or (N, *{shape})" if f in _STAGE_FIELDS else f"{shape}"
                 raise ValueError(f"cost field {f} has shape {a.shape}; expected {allowed}")
+        for f in _FIELDS:
+            if not np.all(np.isfinite(getattr(self, f))):
+                raise ValueError(f"cost field {f} contains non-finite values")
+        for f in ("Q", "R", "QN"):
+            object.__setattr__(self, f, symmetric(f"cost field {f}", getattr(self, f)))
+        if not np.isfinite(self.const):
+            raise ValueError(f"cost const must be finite, got {self.const!r}")
         object.__setattr__(self, "const", float(self.const))
+
+    def __repr__(self):
+        n, m = self.QN.shape[0], self.R.shape[-1]
+        stages = [len(getattr(self, f)) for f in _STAGE_FIELDS if self._per_stage(f)]
+        kind = f"per-stage over {stages[0]} stages" if stages else "time-invariant"
+        return f"QuadraticCost(n={n}, m={m}, {kind}, const={self.const:.6g})"
+
+    @classmethod
+    def _combined(cls, fields, const):
+        """A cost from fields that are sums or finite multiples of valid costs' fields (so finite and
+        symmetric already): skips the checks of ``__post_init__``, which the arithmetic would repeat."""
+        cost = object.__new__(cls)
+        for f, a in zip(_FIELDS, fields):
+            object.__setattr__(cost, f, a)
+        object.__setattr__(cost, "const", float(const))
+        if not (np.isfinite(cost.const) and all(np.all(np.isfinite(a)) for a in fields)):
+            raise ValueError("cost arithmetic overflowed to non-finite values")
+        return cost
 
     def __add__(self, other):
         if not isinstance(other, QuadraticCost):
             return NotImplemented
-        return QuadraticCost(*(getattr(self, f) + getattr(other, f) for f in _FIELDS), self.const + other.const)
+        fields = [getattr(self, f) + getattr(other, f) for f in _FIELDS]
+        for f, a in zip(_FIELDS, fields):           # a time-invariant plus a per-stage field is per stage
+            if a.ndim != getattr(self, f).ndim or a.ndim != getattr(other, f).ndim:
+                return QuadraticCost(*fields, self.const + other.const)
+        return QuadraticCost._combined(fields, self.const + other.const)
 
     def __mul__(self, w):
-        w = float(w)
-        return QuadraticCost(*(w * getattr(self, f) for f in _FIELDS), w * self.const)
+        if isinstance(w, (str, bytes, bool, QuadraticCost)) or np.ndim(w) != 0:
+            return NotImplemented
+        try:
+            w = float(w)
+        except (TypeError, ValueError):
+            return NotImplemented
+        if not np.isfinite(w):
+            raise ValueError(f"a cost can only be scaled by a finite number, got {w!r}")
+        return QuadraticCost._combined([w * getattr(self, f) for f in _FIELDS], w * self.const)
 
     __rmul__ = __mul__
 
@@ -124,6 +187,12 @@ class QuadraticCost:
     def value(self, xs, us):
         """``J(x, u)`` of a trajectory ``xs`` (N+1, n), ``us`` (N, m)."""
         xs, us = np.asarray(xs, float), np.asarray(us, float)
+        n, m = self.QN.shape[0], self.R.shape[-1]
+        if us.ndim != 2 or us.shape[1] != m or xs.shape != (len(us) + 1, n):
+            raise ValueError(f"xs and us must have shapes (N+1, {n}) and (N, {m}), got {xs.shape} and {us.shape}")
+        for name, a in (("xs", xs), ("us", us)):
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{name} contains non-finite values")
         N = us.shape[0]
         Q = np.broadcast_to(self.Q, (N, *self.Q.shape[-2:]))
         R = np.broadcast_to(self.R, (N, *self.R.shape[-2:]))
@@ -143,36 +212,90 @@ def reaching_cost(goal, dt=0.01, terminal_weight=1.0, effort_weight=1.0, m=None)
     g = np.asarray(goal, dtype=float)
     if g.ndim != 1 or not np.all(np.isfinite(g)):
         raise ValueError(f"goal must be a finite vector, got {goal!r}")
-    if not (dt > 0 and terminal_weight >= 0 and effort_weight > 0):
-        raise ValueError("dt and effort_weight must be positive and terminal_weight non-negative, "
+    if not (np.isfinite([dt, terminal_weight, effort_weight]).all() and dt > 0 and terminal_weight >= 0
+            and effort_weight > 0):
+        raise ValueError("dt and effort_weight must be positive and terminal_weight non-negative (all finite), "
                          f"got dt={dt}, effort_weight={effort_weight}, terminal_weight={terminal_weight}")
     n = g.shape[0]
     m = n if m is None else m
+    if not isinstance(m, (int, np.integer)) or m < 1:
+        raise ValueError(f"m (the number of controls) must be a positive integer, got {m!r}")
     return QuadraticCost(Q=np.zeros((n, n)), q=np.zeros(n), R=2 * effort_weight * dt * np.eye(m), r=np.zeros(m),
                          QN=2 * terminal_weight * np.eye(n), qN=-2 * terminal_weight * g,
                          const=terminal_weight * g @ g)
 
 
-def legible_cost(J1, J0, alpha):
-    """The legibility objective ``(1 + alpha) J1 - J0`` (eqs. (6.13), (6.15))."""
-    if not np.isfinite(alpha):
-        raise ValueError(f"alpha must be finite, got {alpha!r}")
+def distractor_mixture(J0, weights=None):
+    """``sum_i w_i J0_i`` for a list of distractor costs (default equal weights summing to one);
+    a single QuadraticCost is returned as it is. The Lagrangian of the multi-distractor problem
+    of section 6.5 weighs the distractors this way (its multipliers are the weights)."""
+    if isinstance(J0, QuadraticCost):
+        if weights is not None:
+            raise ValueError("weights are only for a list of distractors J0")
+        return J0
+    costs = list(J0)
+    if not costs or not all(isinstance(J, QuadraticCost) for J in costs):
+        raise ValueError("J0 must be a QuadraticCost or a non-empty list of QuadraticCosts")
+    w = np.full(len(costs), 1.0 / len(costs)) if weights is None else np.asarray(weights, float)
+    if w.shape != (len(costs),) or not np.all(np.isfinite(w)) or np.any(w < 0) or not w.sum() > 0:
+        raise ValueError(f"weights must be {len(costs)} finite non-negative numbers, not all zero, got {weights!r}")
+    total = w[0] * costs[0]
+    for wi, J in zip(w[1:], costs[1:]):
+        total = total + wi * J
+    return total
+
+
+def legible_cost(J1, J0, alpha, weights=None):
+    """The legibility objective ``(1 + alpha) J1 - J0`` (eqs. (6.13), (6.15)); ``J0`` may be a list of
+    distractors, combined by :func:`distractor_mixture` (``weights``, default equal). ``J1`` and ``J0``
+    may be anything that adds and scales (QuadraticCosts, or chapter 7's feature-weight vectors)."""
+    if isinstance(alpha, (str, bytes, bool)) or np.ndim(alpha) != 0:
+        raise ValueError(f"alpha must be a finite number, got {alpha!r}")
+    try:
+        finite = bool(np.isfinite(alpha))
+    except Exception:           # a traced (JAX) value: checked where it is concrete
+        finite = True
+    if not finite:
+        raise ValueError(f"alpha must be a finite number, got {alpha!r}")
+    if isinstance(J0, (list, tuple)):
+        J0 = distractor_mixture(J0, weights)
+    elif weights is not None:
+        raise ValueError("weights are only for a list of distractors J0")
     return (1.0 + alpha) * J1 - J0
 
 
-def solve(dynamics, cost, x0, N):
+def solve(dynamics, cost, x0, N, backend="numpy"):
     """Exact minimiser of ``cost`` under ``dynamics`` from ``x0`` over ``N`` steps (an LQSolution).
 
+    ``backend``: ``"numpy"`` or ``"jax"`` (compiled, :mod:`mutual.motion.lqr_compiled`).
     Raises ValueError if the problem is unbounded (e.g. ``alpha <= 0`` for x' = u).
     """
+    _check_problem(dynamics, cost, N)
     dyn = dynamics.stages(0, N)
     c = cost.stages(0, N)
-    return solve_lq(dyn.A, dyn.B, c.Q, c.R, x0, N, q=c.q, r=c.r, QN=c.QN, qN=c.qN)
+    return solve_lq(dyn.A, dyn.B, c.Q, c.R, x0, N, q=c.q, r=c.r, QN=c.QN, qN=c.qN, backend=backend)
 
 
-def legible_trajectory(dynamics, J1, J0, x0, N, alpha):
-    """Minimiser of ``(1 + alpha) J1 - J0`` (eq. (6.15)); an LQSolution."""
-    return solve(dynamics, legible_cost(J1, J0, alpha), x0, N)
+def _check_problem(dynamics, cost, N):
+    if not isinstance(dynamics, LinearDynamics):
+        raise ValueError(f"dynamics must be a LinearDynamics, got {type(dynamics).__name__}")
+    if not isinstance(cost, QuadraticCost):
+        raise ValueError(f"cost must be a QuadraticCost, got {type(cost).__name__}")
+    if not isinstance(N, (int, np.integer)) or isinstance(N, bool) or N < 1:
+        raise ValueError(f"N must be a positive integer, got {N!r}")
+    if (cost.QN.shape[0], cost.R.shape[-1]) != (dynamics.n, dynamics.m):
+        raise ValueError(f"the cost is for n = {cost.QN.shape[0]} states and m = {cost.R.shape[-1]} controls, "
+                         f"the dynamics have n = {dynamics.n}, m = {dynamics.m}")
+    for f in _STAGE_FIELDS:
+        a = getattr(cost, f)
+        if cost._per_stage(f) and len(a) < N:
+            raise ValueError(f"cost field {f} has {len(a)} stages; N = {N} were asked for")
+
+
+def legible_trajectory(dynamics, J1, J0, x0, N, alpha, weights=None, backend="numpy"):
+    """Minimiser of ``(1 + alpha) J1 - J0`` (eq. (6.15)); an LQSolution. ``J0`` may be a list of
+    distractors (combined with ``weights``, default equal: the Lagrangian form of section 6.5)."""
+    return solve(dynamics, legible_cost(J1, J0, alpha, weights), x0, N, backend=backend)
 
 
 def linear_alpha_schedule(alpha_start, alpha_end):
@@ -187,6 +310,35 @@ def linear_alpha_schedule(alpha_start, alpha_end):
     return lambda s: alpha_start + (alpha_end - alpha_start) * s
 
 
+def geometric_alpha_schedule(alpha_start, alpha_end):
+    """An increasing ``alpha(s) = alpha_start (alpha_end / alpha_start)^s`` for eq. (6.16), ``s = t / T``:
+    equal ratios of task to communication weight in equal times."""
+    if not (0 < alpha_start <= alpha_end and np.isfinite(alpha_end)):
+        raise ValueError(f"need 0 < alpha_start <= alpha_end < inf, got {alpha_start!r}, {alpha_end!r}")
+    return lambda s: alpha_start * (alpha_end / alpha_start) ** s
+
+
+def replan_gains(dynamics, J1, J0, N, w1, w0, starts):
+    """Feedback gains of the replans ``min w1[p] J1 - w0[p] J0`` on ``[starts[p], N)`` (eq. (6.16)),
+    all from one batched backward sweep (:func:`mutual.motion.lqr.riccati_backward`): returns
+    ``K`` (P, N, m, n) and ``k`` (P, N, m); replan ``p``'s control at step ``t >= starts[p]`` is
+    ``K[p, t] x_t + k[p, t]``."""
+    dyn, c1, c0 = dynamics.stages(0, N), J1.stages(0, N), J0.stages(0, N)
+    n, m = dyn.n, dyn.m
+    w1, w0 = np.asarray(w1, float), np.asarray(w0, float)
+
+    def mix(f, shape):          # per replan: w1 J1 - w0 J0, field f
+        one = np.broadcast_to(getattr(c1, f), shape)
+        zero = np.broadcast_to(getattr(c0, f), shape)
+        lead = (-1, *([1] * len(shape)))
+        return w1.reshape(lead) * one - w0.reshape(lead) * zero
+
+    A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
+    K, k, _, _ = riccati_backward(A, B, mix("Q", (N, n, n)), mix("R", (N, m, m)), mix("q", (N, n)),
+                                  mix("r", (N, m)), mix("QN", (n, n)), mix("qN", (n,)), starts=starts)
+    return K, k
+
+
 def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
     """Anticipative legible control by receding horizon (eq. (6.16)).
 
@@ -197,27 +349,28 @@ def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
     (:func:`mutual.motion.lqr.riccati_backward`); the closed loop then applies plan ``i``'s
     feedback on its own steps, which reproduces its open-loop controls exactly.
     Returns ``(xs, us, alphas)`` with ``alphas[k]`` the weight in force at step ``k``.
+    ``J0`` may be a list of distractors (combined with equal weights, :func:`distractor_mixture`).
     """
     if not isinstance(every, (int, np.integer)) or every < 1:
         raise ValueError(f"every must be a positive integer, got {every!r}")
     if not isinstance(N, (int, np.integer)) or N < 1:
         raise ValueError(f"N must be a positive integer, got {N!r}")
+    if not callable(alpha_of_s):
+        raise ValueError(f"alpha_of_s must be a function of s = t / N in [0, 1], got {alpha_of_s!r}")
+    J0 = distractor_mixture(J0)
+    _check_problem(dynamics, J1, N)
+    _check_problem(dynamics, J0, N)
+    x0 = np.asarray(x0, float)
+    if x0.shape != (dynamics.n,) or not np.all(np.isfinite(x0)):
+        raise ValueError(f"x0 must be a finite vector of length {dynamics.n}, got {x0!r}")
     starts = np.arange(0, N, every)
     alphas = np.array([float(alpha_of_s(t / N)) for t in starts])
     if not np.all(np.isfinite(alphas)):
         raise ValueError(f"alpha_of_s returned non-finite weights {alphas.tolist()}")
-    dyn, c1, c0 = dynamics.stages(0, N), J1.stages(0, N), J0.stages(0, N)
+    K, k = replan_gains(dynamics, J1, J0, N, 1.0 + alphas, np.ones_like(alphas), starts)
+    dyn = dynamics.stages(0, N)
     n, m = dyn.n, dyn.m
-    w = (1.0 + alphas)[:, None, None]
-
-    def mix(f, shape):          # per replan: (1 + alpha_i) J1 - J0, field f
-        one = np.broadcast_to(getattr(c1, f), shape)
-        zero = np.broadcast_to(getattr(c0, f), shape)
-        return w.reshape(-1, *([1] * len(shape))) * one - zero
-
     A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
-    K, k, _, _ = riccati_backward(A, B, mix("Q", (N, n, n)), mix("R", (N, m, m)), mix("q", (N, n)),
-                                  mix("r", (N, m)), mix("QN", (n, n)), mix("qN", (n,)), starts=starts)
     plan = np.arange(N) // every            # which replan is in force at each step
     Ks, ks = K[plan, np.arange(N)], k[plan, np.arange(N)]
     xs = np.empty((N + 1, n))
@@ -240,24 +393,3 @@ def random_lq_hypotheses(rng, n=2, m=2, N=10):
     dyn = LinearDynamics(np.eye(n) + 0.2 * rng.normal(size=(n, n)), rng.normal(size=(n, m)))
     J0 = cost(1.0)
     return dyn, J0, J0 + cost(0.5), rng.normal(size=n)
-
-
-def time_to_reach(xs, level, dt, axis=0):
-    """First time at which coordinate ``axis`` of the trajectory ``xs`` reaches ``level``
-    (linear interpolation between knots); ``inf`` if it never does."""
-    x = np.asarray(xs, float)[:, axis] - level
-    side = np.sign(x[0])
-    if side == 0:
-        return 0.0
-    crossed = np.nonzero(side * x <= 0)[0]
-    if crossed.size == 0:
-        return np.inf
-    k = crossed[0]
-    return float((k - 1 + x[k - 1] / (x[k - 1] - x[k])) * dt)
-
-
-def lateral_share(xs, start, stop, axis=0):
-    """Fraction of the path length between knots ``start`` and ``stop`` that is lateral
-    (along coordinate ``axis``): 1 for sideways motion, 0 for motion straight ahead."""
-    steps = np.diff(np.asarray(xs, float), axis=0)[start:stop]
-    return float(np.abs(steps[:, axis]).sum() / np.linalg.norm(steps, axis=1).sum())

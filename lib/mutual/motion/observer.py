@@ -3,11 +3,34 @@
 function, the likelihood ratio ``Lambda`` (eq. 6.7) and its minimiser (Theorem 6.4.2) are exact."""
 
 import numpy as np
+from scipy.special import log_softmax
+
+
+def _check_x0_N(dynamics, x0, N):
+    if not hasattr(dynamics, "stages") or not hasattr(dynamics, "n"):
+        raise ValueError(f"dynamics must be a LinearDynamics, got {type(dynamics).__name__}")
+    if not isinstance(N, (int, np.integer)) or isinstance(N, bool) or N < 1:
+        raise ValueError(f"N must be a positive integer, got {N!r}")
+    x0 = np.asarray(x0, float)
+    if x0.shape != (dynamics.n,) or not np.all(np.isfinite(x0)):
+        raise ValueError(f"x0 must be a finite vector of length {dynamics.n}, got {x0!r}")
+    return x0
+
+
+def _check_controls(dynamics, us, name="us"):
+    """``us`` as a finite (N, m) array, or a ValueError naming it."""
+    us = np.asarray(us, float)
+    if us.ndim != 2 or us.shape[1] != dynamics.m or len(us) < 1:
+        raise ValueError(f"{name} must be an (N, {dynamics.m}) array of controls, got shape {us.shape}")
+    if not np.all(np.isfinite(us)):
+        raise ValueError(f"{name} contains non-finite values (NaN or inf): the likelihood is undefined")
+    return us
 
 
 def lifted_dynamics(dynamics, x0, N):
     """``x_k = Phi_k x0 + G_k u`` for the stacked controls ``u`` (N m,): returns ``(Phi x0, G)``
     with shapes (N+1, n) and (N+1, n, N m)."""
+    x0 = _check_x0_N(dynamics, x0, N)
     dyn = dynamics.stages(0, N)
     n, m = dyn.n, dyn.m
     A = np.broadcast_to(dyn.A, (N, n, n))
@@ -58,7 +81,7 @@ def _gaussian(H, h, c, name):
 
 def log_boltzmann(dynamics, cost, x0, us):
     """``log P(u | H) = -J(u) - log Z`` (eqs. (6.8)-(6.9)); Gaussian in the stacked controls."""
-    us = np.asarray(us, float)
+    us = _check_controls(dynamics, us)
     N = us.shape[0]
     H, h, c = lifted_cost(dynamics, cost, x0, N)
     _, _, log_z = _gaussian(H, h, c, "cost")
@@ -73,6 +96,67 @@ def log_likelihood_ratio(dynamics, J0, J1, x0, us):
     return log_boltzmann(dynamics, J0, x0, us) - log_boltzmann(dynamics, J1, x0, us)
 
 
+def log_boltzmann_prefix(dynamics, cost, x0, us):
+    """``log P(u_{0:k} | H)`` for every prefix ``k = 0 .. N`` of the controls ``us`` (N, m): the
+    marginal of the Boltzmann density (eq. (6.8)) over the controls seen so far, the observer's
+    evidence from a partial motion. Returns (N+1,); entry 0 is 0 and entry N is :func:`log_boltzmann`.
+
+    Exact: with the precision factored as ``H = U U'`` (``U`` upper triangular, a Cholesky
+    factorisation in reversed order), ``w = U'(u - mean)`` has ``w_i`` depending on ``u_0 .. u_i``
+    only, so the density is the product of the prefix conditionals ``phi(w_i) U_ii``.
+    """
+    us = _check_controls(dynamics, us)
+    N, m = us.shape
+    H, h, c = lifted_cost(dynamics, cost, x0, N)
+    mean, _, _ = _gaussian(H, h, c, "cost")
+    rev = np.linalg.cholesky(H[::-1, ::-1])
+    U = rev[::-1, ::-1]                                  # upper triangular, H = U U'
+    w = U.T @ (us.reshape(-1) - mean)
+    terms = -0.5 * w ** 2 - 0.5 * np.log(2 * np.pi) + np.log(np.diag(U))
+    return np.concatenate([[0.0], np.cumsum(terms.reshape(N, m).sum(axis=1))])
+
+
+def weighted_prefix_log_likelihood(dynamics, cost, x0, N, weights):
+    """``sum_k weights[k-1] log P(u_{0:k} | H)`` over the prefixes ``k = 1 .. N`` as a quadratic in the
+    stacked controls: returns ``(Hw, hw, cw)`` with the sum equal to ``-(1/2 u'Hw u + hw'u + cw)``.
+
+    A partial-viewing evidence weighted over time, as Dragan and Srinivasa weight their observer's
+    belief with ``f(t) = T - t`` (section 6.5). Exact: with ``H = U U'`` as in
+    :func:`log_boltzmann_prefix`, prefix ``k`` contributes the first ``k m`` squared components of
+    ``U'(u - mean)``, so the weighted sum is ``U diag(F) U'`` with ``F_i`` the total weight of the
+    prefixes that contain control coordinate ``i``.
+    """
+    w = np.asarray(weights, float)
+    if w.shape != (N,) or not np.all(np.isfinite(w)):
+        raise ValueError(f"weights must be {N} finite numbers (one per prefix k = 1 .. N), got shape {w.shape}")
+    H, h, c = lifted_cost(dynamics, cost, x0, N)
+    mean, _, _ = _gaussian(H, h, c, "cost")
+    m = H.shape[0] // N
+    U = np.linalg.cholesky(H[::-1, ::-1])[::-1, ::-1]
+    F = np.repeat(np.cumsum(w[::-1])[::-1], m)                  # F_i = sum_{k > i // m} w_k
+    Hw = (U * F) @ U.T
+    log_norm = np.sum(F * (np.log(np.diag(U)) - 0.5 * np.log(2 * np.pi)))
+    return Hw, -Hw @ mean, float(0.5 * mean @ Hw @ mean - log_norm)
+
+
+def posterior_over_time(dynamics, costs, x0, us, prior=None):
+    """The observer's belief ``P(H_i | u_{0:k})`` over the hypotheses ``costs`` after each prefix
+    ``k = 0 .. N`` of the motion (Bayes' rule on :func:`log_boltzmann_prefix`, eq. (6.8));
+    shape (N+1, len(costs)), row 0 the prior (default uniform)."""
+    costs = list(costs)
+    if len(costs) < 2:
+        raise ValueError(f"costs must list at least two hypotheses, got {len(costs)}")
+    if prior is None:
+        log_prior = np.full(len(costs), -np.log(len(costs)))
+    else:
+        p = np.asarray(prior, float)
+        if p.shape != (len(costs),) or not np.all(np.isfinite(p)) or np.any(p <= 0):
+            raise ValueError(f"prior must be {len(costs)} positive probabilities, got {prior!r}")
+        log_prior = np.log(p / p.sum())
+    logs = np.stack([log_boltzmann_prefix(dynamics, J, x0, us) for J in costs], axis=1)
+    return np.exp(log_softmax(logs + log_prior, axis=1))
+
+
 def likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0):
     """Minimiser of ``log Lambda(u) + alpha J1(u)`` from the two Gaussians' means and precisions
     (not through the stage costs): solves ``((1+alpha) P1 - P0) u = (1+alpha) P1 mu1 - P0 mu0``.
@@ -80,6 +164,8 @@ def likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0):
     By Theorem 6.4.2 and eq. (6.15) this equals the minimiser of ``(1 + alpha) J1 - J0``.
     Returns the controls (N, m); raises ValueError if the objective is unbounded.
     """
+    if not isinstance(alpha, (int, float, np.integer, np.floating)) or not np.isfinite(alpha):
+        raise ValueError(f"alpha must be a finite number, got {alpha!r}")
     H0, h0, c0 = lifted_cost(dynamics, J0, x0, N)
     H1, h1, c1 = lifted_cost(dynamics, J1, x0, N)
     mu0, _, _ = _gaussian(H0, h0, c0, "J0")
@@ -96,6 +182,10 @@ def likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0):
 def batch_costs(dynamics, cost, x0, us):
     """``J(u)`` for a batch of control sequences ``us`` (B, N, m), through the lifted form."""
     us = np.asarray(us, float)
+    if us.ndim != 3 or us.shape[2] != dynamics.m or 0 in us.shape:
+        raise ValueError(f"us must be a (B, N, {dynamics.m}) batch of control sequences, got shape {us.shape}")
+    if not np.all(np.isfinite(us)):
+        raise ValueError("us contains non-finite values (NaN or inf)")
     H, h, c = lifted_cost(dynamics, cost, x0, us.shape[1])
     U = us.reshape(len(us), -1)
     return 0.5 * np.einsum("bi,ij,bj->b", U, H, U) + U @ h + c
@@ -103,6 +193,10 @@ def batch_costs(dynamics, cost, x0, us):
 
 def sample_boltzmann(dynamics, cost, x0, N, size, rng):
     """Draw ``size`` control sequences (size, N, m) from ``P(u | H) = exp(-J(u)) / Z`` (eq. (6.8))."""
+    if not isinstance(size, (int, np.integer)) or size < 1:
+        raise ValueError(f"size must be a positive integer, got {size!r}")
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy Generator (np.random.default_rng(seed)), got {type(rng).__name__}")
     H, h, c = lifted_cost(dynamics, cost, x0, N)
     mean, L, _ = _gaussian(H, h, c, "cost")
     z = rng.standard_normal((size, len(mean)))

@@ -17,8 +17,8 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from ..supervision.dubins import SPEED, TRUE_W_MAX
-from ..supervision.reachability import (FULL_GRID, QUICK_GRID, ValueFunction, avoid_value_function,
+from ..supervision.dubins import SPEED, TRUE_W_MAX, check_states
+from ..supervision.reachability import (FULL_GRID, QUICK_GRID, ValueFunction, ValueLibrary, avoid_value_function,
                                         unsafe_set_contains, value_library)
 from ..supervision.supervisor import approach_scenes, NoisySupervisor, validate_interventions
 from ..supervision.fit import fit_supervisor
@@ -35,26 +35,52 @@ STUDY_W_MAXES = (0.375, 0.5, 0.625, 0.75, 1.0, 1.5, 2.0, 3.0)
 RECRUIT_KINDS = ("standard-like",) * 3 + ("conservative-like",) * 3 + ("gradual",) * 5 + ("agile",)
 
 
-def simulated_recruits(library, kinds=RECRUIT_KINDS, seed=0):
+SIGMA_RANGE = (0.03, 0.08)
+_KIND_SPEC = {"standard-like": ((1.0,), (0.1, 0.35)), "conservative-like": ((1.0,), (0.85, 1.15)),
+              "gradual": ((0.375, 0.5, 0.625), (0.2, 0.6)), "agile": ((2.0,), (0.0, 0.1))}
+RECRUIT_KIND_NAMES = tuple(_KIND_SPEC)
+
+
+def _check_kinds(kinds):
+    if isinstance(kinds, str) or not isinstance(kinds, (list, tuple)) or len(kinds) == 0:
+        raise ValueError(f"kinds must be a non-empty list of participant kinds, got {kinds!r}")
+    unknown = sorted({str(k) for k in kinds if k not in _KIND_SPEC})
+    if unknown:
+        raise ValueError(f"unknown participant kind(s) {unknown}; expected some of {list(_KIND_SPEC)}")
+    return tuple(kinds)
+
+
+def _check_sigma_range(sigma_range):
+    try:
+        lo, hi = (float(v) for v in sigma_range)
+    except (TypeError, ValueError):
+        raise ValueError(f"sigma_range must be two numbers (low, high), got {sigma_range!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo <= hi):
+        raise ValueError(f"sigma_range must satisfy 0 <= low <= high (finite), got {sigma_range!r}")
+    return lo, hi
+
+
+def simulated_recruits(library, kinds=RECRUIT_KINDS, seed=0, sigma_range=SIGMA_RANGE):
     """SIMULATED participants: one :class:`NoisySupervisor` per entry of ``kinds`` (Fig. 5.5 spread).
 
     ``standard-like``: ``w_max = 1``, ``mu ~ U(0.1, 0.35)``; ``conservative-like``: ``w_max = 1``,
     ``mu ~ U(0.85, 1.15)`` (about the Conservative set, whose doubled obstacle is ``V >= r``);
     ``gradual``: ``w_max`` one of 0.375 / 0.5 / 0.625 (turns earlier, gentler arcs), ``mu ~ U(0.2, 0.6)``;
-    ``agile``: ``w_max = 2`` (overestimates agility), ``mu ~ U(0, 0.1)``. Noise ``sigma ~ U(0.03, 0.08)``
-    (small: with larger noise the estimator of eq. 4.12 drifts to the flattest library member).
-    All ``w_max`` must be library members. Returns (DataFrame of the parameters, list of supervisors).
+    ``agile``: ``w_max = 2`` (overestimates agility), ``mu ~ U(0, 0.1)``. Judgement noise
+    ``sigma ~ U(sigma_range)``, by default ``U(0.03, 0.08)`` (small: with larger noise the estimator of
+    eq. 4.12 drifts to the flattest library member). All ``w_max`` must be library members.
+    Returns (DataFrame of the parameters, list of supervisors).
     """
+    if not isinstance(library, ValueLibrary):
+        raise ValueError(f"library must be a mutual.supervision.reachability.ValueLibrary, got {type(library).__name__}")
+    kinds = _check_kinds(kinds)
+    s_lo, s_hi = _check_sigma_range(sigma_range)
     rng = np.random.default_rng(seed)
-    spec = {"standard-like": ((1.0,), (0.1, 0.35)), "conservative-like": ((1.0,), (0.85, 1.15)),
-            "gradual": ((0.375, 0.5, 0.625), (0.2, 0.6)), "agile": ((2.0,), (0.0, 0.1))}
     rows, sups = [], []
     for i, kind in enumerate(kinds):
-        if kind not in spec:
-            raise ValueError(f"unknown participant kind {kind!r}; expected one of {sorted(spec)}")
-        choices, (lo, hi) = spec[kind]
+        choices, (lo, hi) = _KIND_SPEC[kind]
         w = float(rng.choice(choices))
-        mu, sigma = float(rng.uniform(lo, hi)), float(rng.uniform(0.03, 0.08))
+        mu, sigma = float(rng.uniform(lo, hi)), float(rng.uniform(s_lo, s_hi))
         sups.append(NoisySupervisor(library[library.index_of(w)], mu, sigma))
         rows.append((f"P{i + 1:02d}", kind, w, mu, sigma))
     return pd.DataFrame(rows, columns=["participant", "kind", "w_max", "mu", "sigma"]), sups
@@ -82,6 +108,8 @@ def estimator_recovery(library, w_maxes, mu, sigmas, n_scenes=40, repeats=10, se
     Phase II sessions of ``n_scenes`` are fitted (``fit_supervisor``, MLE); returns a DataFrame with
     the share of exact recoveries and the mean fitted ``w_max``.
     """
+    if isinstance(repeats, bool) or not isinstance(repeats, (int, np.integer)) or repeats < 1:
+        raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
     rng = np.random.default_rng(seed)
     rows = []
     for w in w_maxes:
@@ -98,15 +126,49 @@ def learned_set_cluster(w_max, mu, gradual_below=0.75, conservative_from=0.5):
     """Fig. 5.5's kinds of Learned set: ``gradual`` when the fitted ``w_max < gradual_below``, else
     ``conservative-like`` when ``mu >= conservative_from`` (half way to the doubled obstacle,
     whose safe set is ``V >= r``), else ``standard-like``."""
+    for name, v in (("w_max", w_max), ("mu", mu), ("gradual_below", gradual_below),
+                    ("conservative_from", conservative_from)):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) or not np.isfinite(v):
+            raise ValueError(f"{name} must be a finite number, got {v!r}")
+    if w_max <= 0:
+        raise ValueError(f"w_max must be positive, got {w_max!r}")
     if w_max < gradual_below:
         return "gradual"
     return "conservative-like" if mu >= conservative_from else "standard-like"
 
 
 def fraction_inside(value, states, level=0.0):
-    """(fraction, count) of ``states`` inside the safe set ``{V >= level}`` (Table 5.1 left; Fig. 5.6)."""
+    """(fraction, count) of ``states`` inside the safe set ``{V >= level}`` (Table 5.1 left; Fig. 5.6);
+    states off the grid count as inside (far from the obstacle)."""
+    if not isinstance(value, ValueFunction):
+        raise ValueError(f"value must be a mutual.supervision.reachability.ValueFunction, got {type(value).__name__}")
+    if isinstance(level, bool) or not isinstance(level, (int, float, np.number)) or not np.isfinite(level):
+        raise ValueError(f"level must be a finite number, got {level!r}")
+    states = check_states(states)
+    if len(states) == 0:
+        raise ValueError("states must hold at least one state")
     v = value.interp(states, fill_value=np.inf)
     return float(np.mean(v >= level)), int(np.sum(v >= level))
+
+
+def avoidance_onset(value, level=0.0, resolution=1601):
+    """How far ahead of the obstacle centre a car driving straight at it (theta = 0, y = 0) meets
+    ``{V < level}``: where an avoidance arc on that safe set begins. The first sample below
+    ``level`` on a line of ``resolution`` points is refined by linear interpolation of V (exact for
+    the trilinear V between grid nodes). ValueError if the line never meets the set."""
+    if isinstance(level, bool) or not isinstance(level, (int, float, np.number)) or not np.isfinite(level):
+        raise ValueError(f"level must be a finite number, got {level!r}")
+    w = value.grid_spec.half_width
+    xs = np.linspace(-w, 0.0, resolution)
+    v = value.interp(np.stack([xs, np.zeros_like(xs), np.zeros_like(xs)], axis=1))
+    below = np.flatnonzero(v < level)
+    if len(below) == 0:
+        raise ValueError(f"a car driving straight at the obstacle never meets {{V < {level:g}}} within the grid")
+    i = below[0]
+    if i == 0:
+        return float(-xs[0])
+    frac = (v[i - 1] - level) / (v[i - 1] - v[i])
+    return float(-(xs[i - 1] + frac * (xs[i] - xs[i - 1])))
 
 
 def study_value_functions(quick=False, progress=False):
@@ -118,7 +180,7 @@ def study_value_functions(quick=False, progress=False):
     return library, conservative
 
 
-@dataclass
+@dataclass(repr=False)
 class Study:
     """A SIMULATED study: ``participants`` (generating parameters, fit, exclusion), Phase II
     ``interventions`` (supervisor CSV schema), Phase III ``trials`` (tidy schema of
@@ -137,8 +199,19 @@ class Study:
     record: TeamingRecord
     simulated: bool = True
 
+    def __repr__(self):
+        people = self.participants
+        excluded = int(people["excluded"].sum()) if "excluded" in people else 0
+        n_trials = self.trials.drop_duplicates(["participant", "trial"]).shape[0]
+        label = "SIMULATED " if self.simulated else ""
+        return (f"Study({label}{len(people)} recruits, {len(people) - excluded} analysed, {excluded} excluded; "
+                f"{len(self.interventions)} Phase II interventions; {n_trials} Phase III trials of "
+                f"{', '.join(sorted(self.trials['treatment'].unique()))}; "
+                f"measures {', '.join(self.trials['measure'].unique())})")
 
-def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), seed=0, kinds=RECRUIT_KINDS):
+
+def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), seed=0, kinds=RECRUIT_KINDS,
+                   sigma_range=SIGMA_RANGE):
     """Simulate Phase II and Phase III for recruits of ``kinds`` (Sec. 5.2), all trials in one batch.
 
     Phase II: ``n_scenes`` approaches per recruit; the Learned set is the MLE fit (eq. 4.12,
@@ -147,17 +220,31 @@ def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), s
     the design of :func:`mutual.study.design.study_design` for all recruits, run for those
     who remain (Standard: ``w_max = 1``, ``alpha = 0``; Learned: the fit; Conservative:
     obstacle doubled, ``alpha = 0``); the supervisor is the recruit's own noisy model.
+    ``sigma_range``: the recruits' judgement noise (:func:`simulated_recruits`).
+    Cost: about 0.5 s for the 12 recruits of the thesis with 20 s trials on 2 cores.
     """
+    if not isinstance(library, ValueLibrary):
+        raise ValueError(f"library must be a mutual.supervision.reachability.ValueLibrary, got {type(library).__name__}")
+    if not isinstance(conservative, ValueFunction):
+        raise ValueError(f"conservative must be a ValueFunction, got {type(conservative).__name__}")
+    if isinstance(n_scenes, bool) or not isinstance(n_scenes, (int, np.integer)) or n_scenes < 2:
+        raise ValueError(f"n_scenes must be an integer >= 2 (Phase II scenes per recruit), got {n_scenes!r}")
+    if not isinstance(config, TeamingConfig):
+        raise ValueError(f"config must be a TeamingConfig, got {type(config).__name__}")
     standard = library[library.index_of(TRUE_W_MAX)]
     if conservative.grid_spec != standard.grid_spec:
         raise ValueError("conservative must share the library's grid")
     rng = np.random.default_rng(seed)
-    people, sups = simulated_recruits(library, kinds, seed)
+    people, sups = simulated_recruits(library, kinds, seed, sigma_range)
     tables, fits, extra = [], {}, []
     for pid, sup in zip(people["participant"], sups):
         table = phase2_interventions(sup, n_scenes, rng).assign(participant=pid)
         states = table[["x", "y", "theta"]].to_numpy()
-        fit = fit_supervisor(library, states, prior="mle")
+        try:
+            fit = fit_supervisor(library, states, prior="mle")
+        except ValueError as err:
+            raise ValueError(f"simulated recruit {pid} ({len(states)} interventions in {n_scenes} scenes) cannot "
+                             f"be fitted: {err}") from None
         fits[pid] = fit
         extra.append((len(table), fit.w_max, fit.mu, fit.sigma,
                       not unsafe_set_contains(fit.value_fn, standard, level=fit.mu)))
@@ -168,6 +255,9 @@ def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), s
     design = study_design(len(kinds), seed)
     design["participant"] = design["participant"].map(lambda i: f"P{i:02d}")
     keep = design[design["participant"].isin(people.loc[~people["excluded"], "participant"])].reset_index(drop=True)
+    if len(keep) == 0:
+        raise ValueError(f"all {len(people)} simulated recruits were excluded (no Learned set contains the Standard "
+                         "unsafe set); there is no study to run")
     by_pid = dict(zip(people["participant"], sups))
     team_of = {"Standard": lambda pid: Team(standard, 0.0), "Conservative": lambda pid: Team(conservative, 0.0),
                "Learned": lambda pid: Team(fits[pid].value_fn, fits[pid].mu)}
@@ -185,6 +275,8 @@ def predicted_and_observed(study):
     """Table 5.1 from a study: Phase II interventions inside each safe set (the model's predicted
     false positives relative to Standard) and Phase III average false positives per trial (observed
     relative to Standard), over the analysed participants."""
+    if not isinstance(study, Study):
+        raise ValueError(f"study must be a Study, got {type(study).__name__}")
     people = study.participants[~study.participants["excluded"]]
     iv = study.interventions[study.interventions["participant"].isin(people["participant"])]
     states = iv[["x", "y", "theta"]].to_numpy()
@@ -207,7 +299,12 @@ def predicted_and_observed(study):
 def write_simulated_study(study, folder):
     """Write a simulated ``study``'s tables into ``folder``: ``ch5_simulated_phase3.csv`` (trials),
     ``ch5_simulated_phase2_interventions.csv``, ``ch5_simulated_participants.csv`` and the
-    ILLUSTRATIVE ``ch5_illustrative_questionnaire.csv`` (seed 0); each file atomically."""
+    ILLUSTRATIVE ``ch5_illustrative_questionnaire.csv`` (seed 0); each file atomically. The notebook
+    passes :func:`mutual.compendium.paths.generated_data_dir` (``data/`` only under ``make figures``)."""
+    if not isinstance(study, Study) or not study.simulated:
+        raise ValueError("study must be a simulated Study (these files are named and documented as simulated)")
+    if not isinstance(folder, (str, Path)):
+        raise ValueError(f"folder must be a path, got {type(folder).__name__}")
     folder = Path(folder)
     write_table(study.trials, folder / "ch5_simulated_phase3.csv", "trials")
     write_table(study.interventions, folder / "ch5_simulated_phase2_interventions.csv", "interventions")

@@ -1,237 +1,360 @@
-"""Statistics of the chapter 5 user study (sections 5.3.1-5.3.2).
+"""Statistics of the chapter 5 user study (sections 5.3.1-5.3.2), in the words of a study's data.
 
-* One-way repeated-measures ANOVA (statsmodels ``AnovaRM``) after explicit checks
-  of balance, duplicates and NaN (``AnovaRM`` silently returns NaN on a NaN
-  outcome), with the repeated-measures error term MSE and the Greenhouse-Geisser
-  epsilon and corrected p-value.
-* All-pairs post-hoc Tukey HSD with the repeated-measures error term,
-  q = |mean_i - mean_j| / sqrt(MSE / n), p from the studentized range
-  distribution with k groups and (k-1)(n-1) degrees of freedom; paired t-tests
-  with Holm's correction as a robustness check.
-* The one-sample t-test of a Likert answer against the scale's neutral point.
-* Recovering the error term and Tukey p-values from published summary numbers
-  (group means and F), to check the thesis's own statistics.
+* :func:`rm_anova` ``(data, dv, within, subject)``: the one-way repeated-measures ANOVA from the
+  sums of squares of the checked subject x level table (:func:`cell_table`), with the
+  repeated-measures error term MSE, the Greenhouse-Geisser epsilon and corrected p.
+* :func:`tukey_rm`: all-pairs Tukey HSD with the repeated-measures error term,
+  q = |mean_i - mean_j| / sqrt(MSE / n), p from the studentized range with k levels and
+  (k-1)(n-1) degrees of freedom; :func:`paired_t_holm`: paired t-tests, Holm-corrected.
+* :func:`likert_vs_neutral`: the one-sample t-test of Likert answers against the neutral point.
+* the thesis's own statistics, re-derived from its published numbers, are in :mod:`.published`
+  (Tukey from summary numbers, ``f_p_value``, ``design_from_f_dofs``, ``recover_from_summary``;
+  importable from here too).
+
+Degenerate data. A statistic that the data leave undefined raises :class:`DegenerateDataError`
+(a ``ValueError``) that names the measure and the reason; nothing here returns NaN, an infinite
+statistic or a negative F. As R's ``t.test`` and ``aov`` do, we refuse rather than guess:
+
+* no within-subject variation at all (e.g. a measure that is 0 in every trial, or one constant per
+  subject): the ANOVA's F is 0/0;
+* zero residual variance (every subject shows exactly the same differences between levels): F is
+  infinite;
+* a pair of levels whose paired differences are all the same (identical columns included), or
+  Likert answers that are all equal: the t statistic is 0/0 or infinite.
+
+Numbers count as equal when they agree to about 13 significant digits of the data's magnitude.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import combinations
 
 import numpy as np
 import pandas as pd
 from scipy import stats
-from statsmodels.stats.anova import AnovaRM
-from statsmodels.stats.multitest import multipletests
 
 from .data import LIKERT_RANGE
+from .errors import DegenerateDataError
+from .published import design_from_f_dofs, f_p_value, recover_from_summary, tukey_from_summary  # noqa: F401
+
+_RELATIVE_ZERO = 1e-13
 
 
-@dataclass(frozen=True)
+def _negligible(sum_of_squares, values):
+    """Whether a sum of squares over ``values`` is zero up to rounding at the data's magnitude."""
+    v = np.asarray(values, dtype=float)
+    scale = float(np.max(np.abs(v))) if v.size else 0.0
+    return sum_of_squares <= v.size * (_RELATIVE_ZERO * scale) ** 2
+
+
+@dataclass(frozen=True, repr=False)
 class RMAnova:
-    """Result of :func:`rm_anova`. ``cells`` is the subject x level table of the analysed values."""
+    """Result of :func:`rm_anova`.
+
+    ``F`` with ``df1 = k - 1`` and ``df2 = (k - 1)(n - 1)`` degrees of freedom, its ``p``, the
+    repeated-measures error term ``mse``, the Greenhouse-Geisser ``eps`` and corrected ``p_gg``;
+    ``levels``, their ``means``, ``n_subjects``, and ``cells`` (the subject x level table that was
+    analysed). ``to_dict()`` gives the numbers as plain JSON-ready values.
+    """
     F: float
-    df_num: int
-    df_den: int
+    df1: int
+    df2: int
     p: float
     mse: float
-    epsilon_gg: float
+    eps: float
     p_gg: float
     n_subjects: int
     levels: tuple
     means: dict
-    cells: pd.DataFrame
+    cells: pd.DataFrame = field(compare=False)
+    dv: str = "value"
+    within: str = "level"
+    subject: str = "subject"
+    ss_effect: float = 0.0
+    ss_error: float = 0.0
+
+    # the names of earlier versions (statsmodels' words)
+    @property
+    def df_num(self):
+        return self.df1
+
+    @property
+    def df_den(self):
+        return self.df2
+
+    @property
+    def epsilon_gg(self):
+        return self.eps
+
+    def to_dict(self):
+        """The result as plain values: ``F, df1, df2, p, eps, p_gg, mse, n, levels, means, dv, within, subject``."""
+        return {"dv": str(self.dv), "within": str(self.within), "subject": str(self.subject),
+                "n": int(self.n_subjects), "levels": [str(level) for level in self.levels],
+                "means": {str(level): float(m) for level, m in self.means.items()},
+                "F": float(self.F), "df1": int(self.df1), "df2": int(self.df2), "p": float(self.p),
+                "eps": float(self.eps), "p_gg": float(self.p_gg), "mse": float(self.mse)}
+
+    def __repr__(self):
+        means = ", ".join(f"{level}={m:.4g}" for level, m in self.means.items())
+        return (f"RMAnova({self.dv} ~ {self.within} | {self.subject}: F({self.df1}, {self.df2}) = {self.F:.4g}, "
+                f"p = {self.p:.3g}, GG eps = {self.eps:.3f}, p_GG = {self.p_gg:.3g}, n = {self.n_subjects}; "
+                f"means {means})")
 
 
-def cell_table(data, dv, subject, within, aggregate=None, levels=None):
-    """Subject x level table of ``dv`` after the checks a repeated-measures analysis needs.
+def _select_measure(data, dv):
+    """Tidy trial tables (``measure`` and ``value`` columns): ``dv`` may name a measure."""
+    if isinstance(data, pd.DataFrame) and isinstance(dv, str) and dv not in data.columns \
+            and {"measure", "value"} <= set(data.columns) and (data["measure"] == dv).any():
+        return data.loc[data["measure"] == dv].rename(columns={"value": dv})
+    return data
 
-    Raises ValueError for missing columns, NaN in ``dv``/``subject``/``within``,
-    several rows in a cell unless ``aggregate`` ('mean') is given, a subject
-    missing a level (unbalanced design), or fewer than 2 subjects or levels.
-    ``levels`` fixes the column order (default: sorted).
-    """
+
+def _column_names(data, dv, within, subject):
     if not isinstance(data, pd.DataFrame):
         raise ValueError(f"data must be a pandas DataFrame, got {type(data).__name__}")
-    missing = [c for c in (dv, subject, within) if c not in data.columns]
+    names = {"dv": dv, "within": within, "subject": subject}
+    for arg, name in names.items():
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{arg} must name a column (a non-empty string), got {name!r}")
+    if len(set(names.values())) < 3:
+        raise ValueError(f"dv, within and subject must be three different columns, got {dv!r}, {within!r}, {subject!r}")
+    missing = [c for c in names.values() if c not in data.columns]
     if missing:
-        raise ValueError(f"data is missing columns {missing}")
-    nan_cols = [c for c in (dv, subject, within) if data[c].isna().any()]
-    if nan_cols:
-        raise ValueError(f"data has NaN in columns {nan_cols}; AnovaRM would silently return NaN")
+        raise ValueError(f"data is missing columns {missing} (it has {list(data.columns)})")
+    if len(data) == 0:
+        raise ValueError("data has no rows")
+
+
+def cell_table(data, dv, within, subject, aggregate=None, levels=None):
+    """Subject x level table of ``dv`` (long data: one row per observation) after the checks a
+    repeated-measures analysis needs.
+
+    ``within`` is the column of the repeated factor (e.g. the treatment), ``subject`` the column of
+    participant ids. Raises ValueError naming the column and row for NaN, non-numeric or infinite
+    values, for several rows in a cell unless ``aggregate='mean'`` averages them, for a subject
+    missing a level (unbalanced design), and for fewer than 2 subjects or levels. ``levels`` picks
+    and orders the levels (default: all, sorted); rows of other levels are an error. In a tidy
+    table with ``measure`` and ``value`` columns (:mod:`mutual.study.data`), ``dv`` may name a
+    measure (e.g. ``"false_positives"``): its rows are analysed.
+    """
+    data = _select_measure(data, dv)
+    _column_names(data, dv, within, subject)
+    for col in (subject, within, dv):
+        bad = data[col].isna().to_numpy()
+        if bad.any():
+            raise ValueError(f"column {col!r} has a missing value (NaN) in row {data.index[bad.argmax()]!r}")
     values = pd.to_numeric(data[dv], errors="coerce")
-    if values.isna().any():
-        raise ValueError(f"column {dv!r} must be numeric")
+    bad = values.isna().to_numpy()
+    if bad.any():
+        i = bad.argmax()
+        raise ValueError(f"column {dv!r} must be numeric: row {data.index[i]!r} holds {data[dv].iloc[i]!r}")
+    bad = ~np.isfinite(values.to_numpy(dtype=float))
+    if bad.any():
+        raise ValueError(f"column {dv!r} must hold finite numbers: row {data.index[bad.argmax()]!r} holds "
+                         f"{values.iloc[bad.argmax()]!r}")
     if aggregate not in (None, "mean"):
         raise ValueError(f"aggregate must be None or 'mean', got {aggregate!r}")
-    d = data[[subject, within]].assign(**{dv: values})
+    d = data[[subject, within]].assign(**{dv: values.astype(float)})
+    if levels is not None:
+        if isinstance(levels, str) or not hasattr(levels, "__iter__"):
+            raise ValueError(f"levels must be a list of the levels of {within!r}, got {levels!r}")
+        levels = list(levels)
+        if len(set(levels)) != len(levels):
+            raise ValueError(f"levels must not repeat a level, got {levels}")
+        unknown = sorted(map(str, set(d[within]) - set(levels)))
+        if unknown:
+            raise ValueError(f"column {within!r} has level(s) {unknown} not among levels={levels}; select the rows first")
+        absent = [level for level in levels if level not in set(d[within])]
+        if absent:
+            raise ValueError(f"level(s) {absent} of levels have no rows in column {within!r}")
     sizes = d.groupby([subject, within]).size()
     if aggregate is None and (sizes > 1).any():
         cell = sizes[sizes > 1].index[0]
-        raise ValueError(f"duplicate rows for ({subject}, {within}) = {cell}; pass aggregate='mean' to average them")
+        raise ValueError(f"several rows for ({subject}, {within}) = {cell}; pass aggregate='mean' to average them")
     wide = d.groupby([subject, within])[dv].mean().unstack(within)
-    if levels is not None:
-        unknown = sorted(set(wide.columns) - set(levels))
-        if unknown:
-            raise ValueError(f"unknown {within} level(s) {unknown}; expected {list(levels)}")
-        wide = wide.reindex(columns=list(levels))
+    wide = wide.reindex(columns=levels) if levels is not None else wide.reindex(columns=sorted(wide.columns))
     if wide.isna().any().any():
         holes = wide.isna()
-        who = holes.any(axis=1)
-        raise ValueError(f"unbalanced design: subject(s) {list(wide.index[who])} miss level(s) "
-                         f"{sorted(set(wide.columns[holes.any(axis=0)]))}")
+        who = list(wide.index[holes.any(axis=1)])
+        raise ValueError(f"unbalanced design: subject(s) {who[:5]}{' ...' if len(who) > 5 else ''} miss level(s) "
+                         f"{list(wide.columns[holes.any(axis=0)])} of {within!r}; every subject needs every level")
     if wide.shape[0] < 2 or wide.shape[1] < 2:
-        raise ValueError(f"need at least 2 subjects and 2 levels, got {wide.shape[0]} and {wide.shape[1]}")
+        raise ValueError(f"need at least 2 subjects and 2 levels of {within!r}, got {wide.shape[0]} subject(s) and "
+                         f"{wide.shape[1]} level(s)")
     return wide
 
 
-def greenhouse_geisser_epsilon(wide):
-    """Greenhouse-Geisser epsilon from the double-centred covariance of a subject x level table."""
-    y = np.asarray(wide, dtype=float)
+def greenhouse_geisser_epsilon(cells):
+    """Greenhouse-Geisser epsilon of a subject x level table, from its double-centred covariance S:
+    ``tr(S)^2 / ((k-1) sum S_ij^2)``, in ``[1/(k-1), 1]``; 1 when S is zero."""
+    y = np.asarray(cells, dtype=float)
+    if y.ndim != 2 or y.shape[0] < 2 or y.shape[1] < 2 or not np.isfinite(y).all():
+        raise ValueError(f"cells must be a finite subject x level table with >= 2 rows and columns, got shape {y.shape}")
     k = y.shape[1]
-    s = np.cov(y, rowvar=False)
     c = np.eye(k) - 1.0 / k
-    sdc = c @ s @ c
+    sdc = c @ np.cov(y, rowvar=False) @ c
     denom = (k - 1) * np.sum(sdc ** 2)
-    return float(np.trace(sdc) ** 2 / denom) if denom > 0 else 1.0
+    if denom <= 0:
+        return 1.0
+    return float(np.clip(np.trace(sdc) ** 2 / denom, 1.0 / (k - 1), 1.0))
 
 
-def rm_anova(data, dv, subject, within, aggregate=None, levels=None):
-    """One-way repeated-measures ANOVA of ``dv`` over ``within`` (section 5.3.1).
-
-    F, df and p come from statsmodels ``AnovaRM`` on the checked cell table
-    (:func:`cell_table`); MSE = SS_error / ((k-1)(n-1)) and the Greenhouse-Geisser
-    corrected p use the same table.
-    """
-    wide = cell_table(data, dv, subject, within, aggregate, levels)
-    long = wide.stack().rename("y").reset_index()
-    long.columns = ["subject", "level", "y"]
-    table = AnovaRM(long, "y", "subject", within=["level"]).fit().anova_table.iloc[0]
-    n, k = wide.shape
+def _anova_of_cells(wide, dv, within, subject):
     y = wide.to_numpy(dtype=float)
-    resid = y - y.mean(axis=1, keepdims=True) - y.mean(axis=0, keepdims=True) + y.mean()
-    df_num, df_den = k - 1, (k - 1) * (n - 1)
-    mse = float(np.sum(resid ** 2) / df_den)
-    eps = greenhouse_geisser_epsilon(wide)
-    F = float(table["F Value"])
-    return RMAnova(F=F, df_num=int(table["Num DF"]), df_den=int(table["Den DF"]), p=float(table["Pr > F"]),
-                   mse=mse, epsilon_gg=eps, p_gg=float(stats.f.sf(F, eps * df_num, eps * df_den)),
-                   n_subjects=n, levels=tuple(wide.columns), means=dict(wide.mean()), cells=wide)
+    n, k = y.shape
+    grand = y.mean()
+    row, col = y.mean(axis=1, keepdims=True), y.mean(axis=0, keepdims=True)
+    ss_within = float(np.sum((y - row) ** 2))
+    ss_effect = float(n * np.sum((col - grand) ** 2))
+    ss_error = float(np.sum((y - row - col + grand) ** 2))
+    if _negligible(ss_within, y):
+        what = f"every value is {y.flat[0]:g}" if np.all(y == y.flat[0]) else \
+            f"every subject has one value at every level of {within!r}"
+        raise DegenerateDataError(f"{dv!r} does not vary within subjects ({what}): the repeated-measures F is 0/0, "
+                                  "so there is nothing to test")
+    if _negligible(ss_error, y):
+        raise DegenerateDataError(
+            f"{dv!r} has zero residual variance: every subject shows exactly the same differences between the levels "
+            f"of {within!r}, so the repeated-measures F is infinite; report the differences themselves")
+    if _negligible(ss_effect, y):
+        ss_effect = 0.0
+    df1, df2 = k - 1, (k - 1) * (n - 1)
+    mse = ss_error / df2
+    F = (ss_effect / df1) / mse
+    eps = greenhouse_geisser_epsilon(y)
+    return RMAnova(F=float(F), df1=df1, df2=df2, p=float(stats.f.sf(F, df1, df2)), mse=float(mse), eps=eps,
+                   p_gg=float(stats.f.sf(F, eps * df1, eps * df2)), n_subjects=n, levels=tuple(wide.columns),
+                   means={c: float(m) for c, m in zip(wide.columns, col.ravel())}, cells=wide, dv=dv, within=within,
+                   subject=subject, ss_effect=ss_effect, ss_error=ss_error)
 
 
-def tukey_from_summary(means, mse, n):
-    """Tukey HSD p-values for all pairs from level means, a repeated-measures MSE and n subjects.
+def rm_anova(data, dv, within, subject, aggregate=None, levels=None):
+    """One-way repeated-measures ANOVA of ``dv`` over the levels of ``within`` (section 5.3.1).
 
-    q = |m_i - m_j| / sqrt(MSE / n); p = P(Q > q) for the studentized range with
-    k = len(means) and (k-1)(n-1) degrees of freedom. Returns a DataFrame with
-    columns A, B, mean_A, mean_B, diff, q, p.
+    ``data``: long format, one row per observation, with columns ``dv`` (numbers), ``within`` (the
+    level, e.g. the treatment; any names) and ``subject`` (participant ids); ``aggregate='mean'``
+    averages repeated rows of a cell (e.g. two trials per treatment). From the checked cell table
+    (:func:`cell_table`): ``SS_effect = n sum_j (m_j - m)^2``, ``SS_error`` the subject x level
+    interaction, ``F = (SS_effect / (k-1)) / (SS_error / ((k-1)(n-1)))``, p from the F
+    distribution; the Greenhouse-Geisser correction scales both degrees of freedom by ``eps``.
+    Raises :class:`DegenerateDataError` when F is undefined (module docstring). Returns an
+    :class:`RMAnova`.
     """
-    means = dict(means)
-    k = len(means)
-    if k < 2:
-        raise ValueError(f"means needs at least 2 levels, got {k}")
-    if not (np.isfinite(mse) and mse > 0):
-        raise ValueError(f"mse must be a positive number, got {mse!r}")
-    if not (isinstance(n, (int, np.integer)) and n >= 2):
-        raise ValueError(f"n must be an integer >= 2, got {n!r}")
-    df = (k - 1) * (n - 1)
-    rows = []
-    for a, b in combinations(means, 2):
-        diff = means[a] - means[b]
-        q = abs(diff) / np.sqrt(mse / n)
-        rows.append((a, b, means[a], means[b], diff, q, float(stats.studentized_range.sf(q, k, df))))
-    return pd.DataFrame(rows, columns=["A", "B", "mean_A", "mean_B", "diff", "q", "p"])
+    return _anova_of_cells(cell_table(data, dv, within, subject, aggregate, levels), dv, within, subject)
 
 
-def tukey_rm(anova):
-    """All-pairs Tukey HSD with the repeated-measures error term of an :class:`RMAnova`."""
-    return tukey_from_summary(anova.means, anova.mse, anova.n_subjects)
+def _anova_from(data, dv, within, subject, aggregate, levels):
+    if isinstance(data, RMAnova):
+        return data
+    if dv is None or within is None or subject is None:
+        raise ValueError("pass an RMAnova, or long data with dv, within and subject column names")
+    return rm_anova(data, dv, within, subject, aggregate, levels)
 
 
-def paired_t_holm(cells):
-    """Paired t-tests between all pairs of columns of a subject x level table, Holm-corrected.
+def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=None):
+    """All-pairs Tukey HSD with the repeated-measures error term of an :class:`RMAnova` (or of
+    ``rm_anova(anova, dv, within, subject, ...)`` when given long data). Columns A, B, mean_A,
+    mean_B, diff, q, p."""
+    res = _anova_from(anova, dv, within, subject, aggregate, levels)
+    return tukey_from_summary(res.means, res.mse, res.n_subjects)
 
-    Returns a DataFrame with columns A, B, t, df, p, p_holm.
+
+def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, levels=None):
+    """Paired t-tests between all pairs of levels, Holm-corrected.
+
+    ``cells``: a subject x level table (wide), an :class:`RMAnova` (its cells), or long data with
+    ``dv``, ``within`` and ``subject`` named (as :func:`rm_anova`). Returns a DataFrame with
+    columns A, B, mean_diff, t, df, p, p_holm. A pair whose differences are all equal (identical
+    levels included) has no defined t: :class:`DegenerateDataError` names the pair.
     """
-    cells = pd.DataFrame(cells)
-    if cells.isna().any().any() or cells.shape[1] < 2 or cells.shape[0] < 2:
-        raise ValueError("cells must be a complete subject x level table with >= 2 subjects and levels")
+    if isinstance(cells, RMAnova):
+        wide = cells.cells
+    elif dv is not None or within is not None or subject is not None:
+        wide = _anova_from(cells, dv, within, subject, aggregate, levels).cells
+    else:
+        if not isinstance(cells, pd.DataFrame):
+            raise ValueError(f"cells must be a subject x level DataFrame, an RMAnova or long data, got "
+                             f"{type(cells).__name__}")
+        wide = cells
+    try:
+        y = wide.to_numpy(dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("cells must hold numbers only (a subject x level table)") from None
+    if y.ndim != 2 or y.shape[0] < 2 or y.shape[1] < 2:
+        raise ValueError(f"cells must be a subject x level table with >= 2 subjects and >= 2 levels, got shape {y.shape}")
+    if not np.isfinite(y).all():
+        raise ValueError("cells must be a complete table of finite numbers (no NaN: every subject needs every level)")
     rows = []
-    for a, b in combinations(cells.columns, 2):
-        res = stats.ttest_rel(cells[a], cells[b])
-        rows.append((a, b, float(res.statistic), int(res.df), float(res.pvalue)))
-    out = pd.DataFrame(rows, columns=["A", "B", "t", "df", "p"])
-    out["p_holm"] = multipletests(out["p"], method="holm")[1]
+    for (i, a), (j, b) in combinations(enumerate(wide.columns), 2):
+        d = y[:, i] - y[:, j]
+        if _negligible(float(np.sum((d - d.mean()) ** 2)), np.concatenate([y[:, i], y[:, j]])):
+            what = "identical for every subject" if _negligible(float(np.sum(d ** 2)), y[:, [i, j]]) else \
+                f"the same for every subject ({d[0]:g})"
+            raise DegenerateDataError(f"levels {a!r} and {b!r}: the paired differences are {what}, so the paired t "
+                                      "statistic is undefined (zero variance)")
+        res = stats.ttest_rel(y[:, i], y[:, j])
+        rows.append((a, b, float(d.mean()), float(res.statistic), int(res.df), float(res.pvalue)))
+    out = pd.DataFrame(rows, columns=["A", "B", "mean_diff", "t", "df", "p"])
+    out["p_holm"] = holm(out["p"].to_numpy())
     return out
+
+
+def holm(p):
+    """Holm's step-down adjusted p-values: sorted ascending, ``p_(i) (m - i + 1)`` made monotone and capped at 1
+    (the same numbers as statsmodels' ``multipletests(method="holm")``, without its per-call garbage collection)."""
+    p = np.asarray(p, dtype=float)
+    if p.ndim != 1 or not ((p >= 0) & (p <= 1)).all():
+        raise ValueError(f"p must be a 1-D array of probabilities in [0, 1], got {p!r}")
+    order = np.argsort(p, kind="stable")
+    adjusted = np.minimum(1.0, np.maximum.accumulate(p[order] * (len(p) - np.arange(len(p)))))
+    out = np.empty_like(p)
+    out[order] = adjusted
+    return out
+
+
+def pairwise_comparisons(anova, as_records=False):
+    """Every pair of levels of an :class:`RMAnova`: the RM-error Tukey HSD (``q``, ``p_tukey``) beside the
+    paired t-test with Holm's correction (``t``, ``df``, ``p_t``, ``p_holm``), one row per pair with
+    ``A``, ``B``, ``mean_A``, ``mean_B`` and ``diff = mean_A - mean_B``. ``as_records=True`` returns a list
+    of dicts of plain Python numbers and strings (ready for JSON). Raises :class:`DegenerateDataError` as
+    :func:`paired_t_holm` does."""
+    if not isinstance(anova, RMAnova):
+        raise ValueError(f"anova must be an RMAnova, got {type(anova).__name__}")
+    tukey = tukey_rm(anova).rename(columns={"p": "p_tukey"})
+    paired = paired_t_holm(anova).rename(columns={"p": "p_t"}).drop(columns="mean_diff")
+    table = tukey.merge(paired, on=["A", "B"], how="left")
+    if not as_records:
+        return table
+    plain = {"A": str, "B": str, "df": int}
+    return [{k: plain.get(k, float)(v) for k, v in row.items()} for row in table.to_dict("records")]
 
 
 def likert_vs_neutral(answers, neutral=4.0):
     """One-sample t-test of Likert answers against the neutral point (section 5.3.2).
 
-    Answers must be whole numbers in 1..7. Returns dict(mean, t, df, p, n).
+    Answers must be whole numbers in 1..7, at least two, not all equal (then t is undefined:
+    :class:`DegenerateDataError`). Returns dict(mean, t, df, p, n).
     """
-    a = np.asarray(answers, dtype=float)
+    try:
+        a = np.asarray(answers, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"answers must be numbers, got {answers!r}") from None
     lo, hi = LIKERT_RANGE
     if a.ndim != 1 or a.size < 2:
         raise ValueError(f"answers must be a 1-D sequence of at least 2 answers, got shape {a.shape}")
     if not np.isfinite(a).all() or ((a < lo) | (a > hi)).any() or not np.allclose(a, np.round(a)):
         raise ValueError(f"answers must be whole numbers in {lo}..{hi}")
+    if isinstance(neutral, bool) or not isinstance(neutral, (int, float, np.number)) or not lo <= neutral <= hi:
+        raise ValueError(f"neutral must be a number in {lo}..{hi}, got {neutral!r}")
+    if np.all(a == a[0]):
+        raise DegenerateDataError(f"all {a.size} answers are {a[0]:g}: with zero variance the t statistic is "
+                                  f"undefined; report the answers themselves")
     res = stats.ttest_1samp(a, neutral)
     return {"mean": float(a.mean()), "t": float(res.statistic), "df": int(a.size - 1),
             "p": float(res.pvalue), "n": int(a.size)}
 
 
-def f_p_value(F, df_num, df_den):
-    """Upper-tail p-value of an F statistic."""
-    if not (F >= 0 and df_num > 0 and df_den > 0):
-        raise ValueError(f"need F >= 0 and positive degrees of freedom, got F={F}, df=({df_num}, {df_den})")
-    return float(stats.f.sf(F, df_num, df_den))
-
-
-def design_from_f_dofs(df_num, df_den):
-    """Levels k = df_num + 1 and subjects n = df_den / df_num + 1 of a one-way repeated-measures F."""
-    n = df_den / df_num + 1
-    if not float(n).is_integer():
-        raise ValueError(f"F({df_num}, {df_den}) is not a one-way repeated-measures design")
-    return {"levels": int(df_num + 1), "subjects": int(n)}
-
-
-def recover_from_summary(means, F, df_num, df_den):
-    """Recover the repeated-measures error term and Tukey p-values from published numbers.
-
-    From level means m (k = df_num + 1 of them) and F(df_num, df_den):
-    n = df_den / (k-1) + 1 subjects, MS_treatment = n * var(m, ddof=1), MSE =
-    MS_treatment / F; then :func:`tukey_from_summary`. Returns dict(n, mse, p, tukey).
-    """
-    means = dict(means)
-    shape = design_from_f_dofs(df_num, df_den)
-    if len(means) != shape["levels"]:
-        raise ValueError(f"F({df_num}, {df_den}) implies {shape['levels']} levels, got {len(means)} means")
-    if not F > 0:
-        raise ValueError(f"F must be positive, got {F!r}")
-    n = shape["subjects"]
-    ms_treatment = n * np.var(list(means.values()), ddof=1)
-    mse = float(ms_treatment / F)
-    return {"n": n, "mse": mse, "p": f_p_value(F, df_num, df_den), "tukey": tukey_from_summary(means, mse, n)}
-
-
 def significance_stars(p):
     """'***' (p < .001), '**' (< .01), '*' (< .05) or 'n.s.'."""
+    if isinstance(p, bool) or not isinstance(p, (int, float, np.number)) or not 0 <= p <= 1:
+        raise ValueError(f"p must be a probability in [0, 1], got {p!r}")
     return "***" if p < 0.001 else "**" if p < 0.01 else "*" if p < 0.05 else "n.s."
-
-
-def plot_condition_means(ax, anova, tukey, colors=None):
-    """Fig. 5.4: the mean of each level with standard-error bars and Tukey significance brackets."""
-    levels = list(anova.levels)
-    cells = anova.cells[levels]
-    means, se = cells.mean(), cells.std(ddof=1) / np.sqrt(len(cells))
-    x = np.arange(len(levels))
-    ax.bar(x, means, yerr=se, capsize=4, color=colors or None, alpha=0.85)
-    ax.set_xticks(x, levels)
-    top = float((means + se).max())
-    step = 0.09 * top if top > 0 else 0.1
-    for i, row in enumerate(tukey.itertuples()):
-        a, b = levels.index(row.A), levels.index(row.B)
-        y = top + step * (i + 1)
-        ax.plot([a, a, b, b], [y - step * 0.3, y, y, y - step * 0.3], color="black", lw=0.8)
-        ax.text((a + b) / 2, y, f"{significance_stars(row.p)} (p={row.p:.3g})", ha="center", va="bottom", fontsize=7)
-    ax.set_ylim(0, top + step * (len(tukey) + 1.2))
-    return ax

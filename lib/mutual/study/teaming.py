@@ -24,7 +24,7 @@ from ..supervision.supervisor import NoisySupervisor
 OBSTACLE_RADIUS = 1.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Team:
     """A robot team's safe set ``{V >= alpha}`` used by the minimally invasive controller."""
     value: ValueFunction
@@ -33,8 +33,13 @@ class Team:
     def __post_init__(self):
         if not isinstance(self.value, ValueFunction):
             raise ValueError("value must be a mutual.supervision.reachability.ValueFunction")
-        if not np.isfinite(self.alpha):
-            raise ValueError(f"alpha must be finite, got {self.alpha!r}")
+        if isinstance(self.alpha, bool) or not isinstance(self.alpha, (int, float, np.number)) \
+                or not np.isfinite(self.alpha):
+            raise ValueError(f"alpha must be a finite number, got {self.alpha!r}")
+
+    def __repr__(self):
+        return (f"Team(safe set V >= {self.alpha:.3g} of the Dubins model w_max={self.value.w_max:g}, "
+                f"obstacle radius {self.value.obstacle_radius:g})")
 
 
 @dataclass(frozen=True)
@@ -63,21 +68,30 @@ class TeamingConfig:
     removal_cost: float = 0.5
 
     def __post_init__(self):
+        def number(name):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)) or not np.isfinite(v):
+                raise ValueError(f"{name} must be a finite number, got {v!r}")
+            return v
         for name in ("width", "height", "obstacle_radius", "duration", "dt", "near_distance", "goal_tolerance",
                      "heading_gain"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive number, got {v!r}")
+            if not number(name) > 0:
+                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
+        for name in ("depot_clearance", "obstacle_gap", "filter_margin", "trip_reward", "collision_cost",
+                     "removal_cost"):
+            if number(name) < 0:
+                raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")
         for name in ("n_robots", "n_obstacles"):
-            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
-                raise ValueError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
-        if not 0 <= self.detection_prob <= 1:
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+        if not 0 <= number("detection_prob") <= 1:
             raise ValueError(f"detection_prob must lie in [0, 1], got {self.detection_prob!r}")
         if self.width <= 2 * self.depot_clearance:
             raise ValueError("width must exceed twice depot_clearance")
 
 
-@dataclass
+@dataclass(repr=False)
 class TeamingRecord:
     """Snapshots of one trial (for Fig. 5.3): robot states, obstacle centres, detections, times."""
     times: list = field(default_factory=list)
@@ -86,6 +100,11 @@ class TeamingRecord:
     detected: list = field(default_factory=list)
     removals: list = field(default_factory=list)
 
+    def __repr__(self):
+        span = f"{self.times[0]:g}-{self.times[-1]:g} s" if self.times else "empty"
+        robots = len(self.robots[0]) if self.robots else 0
+        return f"TeamingRecord({len(self.times)} snapshots, {span}, {robots} robots, {len(self.removals)} removals)"
+
 
 def task_layout(version, config):
     """Obstacle centres and robot start states of task ``version`` (a seeded random layout).
@@ -93,6 +112,10 @@ def task_layout(version, config):
     Obstacles are placed uniformly in the middle of the workspace (``depot_clearance`` from
     each depot), at least ``obstacle_gap`` apart; robots start on alternating depots.
     """
+    if isinstance(version, bool) or not isinstance(version, (int, np.integer)) or version < 0:
+        raise ValueError(f"version must be a non-negative whole number (a task version), got {version!r}")
+    if not isinstance(config, TeamingConfig):
+        raise ValueError(f"config must be a TeamingConfig, got {type(config).__name__}")
     rng = np.random.default_rng([20_19, int(version)])
     obstacles = _free_positions(rng, config, config.n_obstacles)
     side = np.arange(config.n_robots) % 2
@@ -131,14 +154,46 @@ def _relocate(rng, config, others, robots):
     return pool[np.argmax(far)]
 
 
-def _group_interp(functions, which, states, fill_value):
-    """Evaluate ``functions[which[b]]`` on ``states[b]`` (shape (B, ..., 3)) for every trial b."""
-    out = np.empty(states.shape[:-1])
-    for g, fn in enumerate(functions):
-        sel = which == g
-        if sel.any():
-            out[sel] = fn.interp(states[sel].reshape(-1, 3), fill_value=fill_value).reshape(out[sel].shape)
-    return out
+class _Stack:
+    """Value functions on one grid, interpolated together: trial ``b`` uses ``functions[which[b]]``.
+
+    The same trilinear interpolation as :meth:`ValueFunction.interp` (periodic in theta,
+    ``fill_value`` off the (x, y) domain), done for every trial in one gather.
+    """
+
+    def __init__(self, functions, which, role):
+        specs = {f.grid_spec for f in functions}
+        if len(specs) != 1:
+            raise ValueError(f"all {role} value functions must share one grid_spec, got {len(specs)} different grids")
+        self.spec = specs.pop()
+        self.size = int(np.prod(self.spec.shape))
+        self.values = np.concatenate([f.values.ravel() for f in functions])
+        self.dtheta = np.concatenate([f.dvalues_dtheta.ravel() for f in functions])
+        self.offset = np.asarray(which) * self.size
+
+    def interp(self, states, fill_value=np.inf, derivative=False, rows=None):
+        """V (or dV/dtheta) of each trial's function at ``states`` (B, ..., 3); ``rows`` selects trials."""
+        offset = self.offset if rows is None else self.offset[rows]
+        offset = np.broadcast_to(offset.reshape(offset.shape + (1,) * (states.ndim - 2)), states.shape[:-1])
+        inside = (np.abs(states[..., 0]) <= self.spec.half_width) & (np.abs(states[..., 1]) <= self.spec.half_width)
+        out = np.full(states.shape[:-1], fill_value, dtype=float)
+        where = np.nonzero(inside)          # only states on the grid (most robot-obstacle pairs are far apart)
+        s, offset = states[where], offset[where]
+        nx, ny, nt = self.spec.shape
+        pos = (s - self.spec.lo) / self.spec.spacings
+        ix = np.clip(pos[:, 0].astype(np.intp), 0, nx - 2)
+        iy = np.clip(pos[:, 1].astype(np.intp), 0, ny - 2)
+        it = np.floor(pos[:, 2]).astype(np.intp)
+        wx, wy, wt = pos[:, 0] - ix, pos[:, 1] - iy, pos[:, 2] - it
+        it0, it1 = it % nt, (it + 1) % nt
+        table = self.dtheta if derivative else self.values
+        result = 0.0
+        for dx, fx in ((0, 1 - wx), (1, wx)):
+            for dy, fy in ((0, 1 - wy), (1, wy)):
+                base = offset + ((ix + dx) * ny + iy + dy) * nt
+                result = result + fx * fy * ((1 - wt) * table[base + it0] + wt * table[base + it1])
+        out[where] = result
+        return out
 
 
 def _unique(objects):
@@ -191,37 +246,38 @@ def _drive(b, teams, config):
     ``{V_team >= alpha + margin}``, then turns at the optimal control's sign until it stops
     approaching that obstacle (it has cleared it); turn rates are clipped to the true ``w_max``.
     """
-    fns, which, alpha = teams
+    stack, alpha = teams
     n, R, _ = b.robots.shape
     bearing = np.arctan2(b.goal_y - b.robots[..., 1], b.goal_x - b.robots[..., 0])
     u = np.clip(config.heading_gain * np.angle(np.exp(1j * (bearing - b.robots[..., 2]))), -TRUE_W_MAX, TRUE_W_MAX)
     nxt = dubins_step(b.robots.reshape(-1, 3), u.ravel(), config.dt).reshape(n, R, 3)
-    v_next = _group_interp(fns, which, _relative(nxt, b.obs), np.inf) - alpha - config.filter_margin
+    v_next = stack.interp(_relative(nxt, b.obs)) - alpha - config.filter_margin
     v_next = np.where(b.detected, v_next, np.inf)
     worst = np.argmin(v_next, axis=2)
     engage = (np.take_along_axis(v_next, worst[..., None], 2)[..., 0] < 0) & (b.latched != worst)
     if engage.any():
         bi, ri = np.nonzero(engage)
-        rel_now = _relative(b.robots, b.obs)[bi, ri, worst[bi, ri]]
-        for g, fn in enumerate(fns):
-            sel = which[bi] == g
-            if sel.any():
-                b.turn[bi[sel], ri[sel]] = np.clip(fn.safe_control(rel_now[sel]), -TRUE_W_MAX, TRUE_W_MAX)
+        rel_now = np.concatenate([b.robots[bi, ri, :2] - b.obs[bi, worst[bi, ri]], b.robots[bi, ri, 2:]], axis=1)
+        slope = stack.interp(rel_now, fill_value=0.0, derivative=True, rows=bi)
+        # the optimal avoid control u* = w sign(dV/dtheta) of the team's model, clipped to the robots' turn rate
+        w_model = np.minimum(stack.w_max[bi], TRUE_W_MAX)
+        b.turn[bi, ri] = np.where(slope >= 0, w_model, -w_model)
         b.latched[bi, ri] = worst[bi, ri]
     if (b.latched >= 0).any():
         nxt = dubins_step(b.robots.reshape(-1, 3), np.where(b.latched >= 0, b.turn, u).ravel(),
                           config.dt).reshape(n, R, 3)
     b.robots = nxt
-    held = np.take_along_axis(_relative(b.robots, b.obs), np.maximum(b.latched, 0)[..., None, None], 2)[:, :, 0]
-    approaching = held[..., 0] * np.cos(held[..., 2]) + held[..., 1] * np.sin(held[..., 2]) < 0
-    b.latched = np.where(approaching, b.latched, -1)
+    if (b.latched >= 0).any():
+        held = b.robots[..., :2] - np.take_along_axis(b.obs, np.maximum(b.latched, 0)[..., None], 1)
+        approaching = held[..., 0] * np.cos(b.robots[..., 2]) + held[..., 1] * np.sin(b.robots[..., 2]) < 0
+        b.latched = np.where(approaching, b.latched, -1)
 
 
 def _supervise(b, sups, config, rng):
     """The noisy idealized supervisor (Sec. 4.3): a fresh judgement level ``mu - w`` whenever a robot
     comes within ``near_distance`` of an obstacle; remove (relocate) the obstacle when a near robot
     reaches ``V_S <= level``. Returns the (trial, obstacle) pairs removed."""
-    fns, which, mu, sigma = sups
+    stack, mu, sigma = sups
     rel = _relative(b.robots, b.obs)
     near = np.hypot(rel[..., 0], rel[..., 1]) <= config.near_distance
     fresh = near & ~b.was_near
@@ -230,7 +286,7 @@ def _supervise(b, sups, config, rng):
         b.counts["encounters"] += fresh.sum(axis=(1, 2))
         b.counts["detected_encounters"] += (fresh & b.detected).sum(axis=(1, 2))
     b.was_near = near
-    trigger = near & (_group_interp(fns, which, rel, np.inf) <= b.threshold)
+    trigger = near & (stack.interp(rel) <= b.threshold)
     removed = list(zip(*np.nonzero(trigger.any(axis=1))))
     for t, o in removed:
         involved = near[t, :, o] | trigger[t, :, o]
@@ -245,8 +301,8 @@ def _supervise(b, sups, config, rng):
 
 def _end_trips(b, config, rng):
     """Collisions restart a trip from its depot, arrivals complete it; both draw a new goal and detections."""
-    rel = _relative(b.robots, b.obs)
-    crashed = np.any(np.hypot(rel[..., 0], rel[..., 1]) < config.obstacle_radius, axis=2)
+    gap = b.robots[:, :, None, :2] - b.obs[:, None, :, :]
+    crashed = np.any(np.hypot(gap[..., 0], gap[..., 1]) < config.obstacle_radius, axis=2)
     arrived = (np.abs(b.robots[..., 0] - b.goal_x) < config.goal_tolerance) & ~crashed
     b.counts["collisions"] += crashed.sum(axis=1)
     b.counts["trips"] += arrived.sum(axis=1)
@@ -270,19 +326,33 @@ def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=
     within ``near_distance``, and those with the obstacle detected); with ``record=i`` also a
     :class:`TeamingRecord` of trial ``i``.
     """
+    teams, supervisors, versions = list(teams), list(supervisors), list(versions)
     n = len(teams)
     if n == 0 or len(supervisors) != n or len(versions) != n:
         raise ValueError(f"teams, supervisors and versions must be non-empty and equally long, "
                          f"got {len(teams)}, {len(supervisors)}, {len(versions)}")
-    if record is not None and not 0 <= record < n:
+    bad = next((i for i, t in enumerate(teams) if not isinstance(t, Team)), None)
+    if bad is not None:
+        raise ValueError(f"teams[{bad}] must be a Team, got {type(teams[bad]).__name__}")
+    bad = next((i for i, s in enumerate(supervisors) if not isinstance(s, NoisySupervisor)), None)
+    if bad is not None:
+        raise ValueError(f"supervisors[{bad}] must be a NoisySupervisor, got {type(supervisors[bad]).__name__}")
+    bad = next((i for i, v in enumerate(versions) if isinstance(v, bool) or not isinstance(v, (int, np.integer))), None)
+    if bad is not None:
+        raise ValueError(f"versions[{bad}] must be a whole number (a task version), got {versions[bad]!r}")
+    if not isinstance(config, TeamingConfig):
+        raise ValueError(f"config must be a TeamingConfig, got {type(config).__name__}")
+    if record is not None and (isinstance(record, bool) or not isinstance(record, (int, np.integer))
+                               or not 0 <= record < n):
         raise ValueError(f"record must index a trial (0..{n - 1}), got {record!r}")
     rng = np.random.default_rng(seed)
     b = _start_batch(versions, config, rng)
-    team_fns, team_of = _unique([t.value for t in teams])
-    sup_fns, sup_of = _unique([s.value_fn for s in supervisors])
+    team_stack = _Stack(*_unique([t.value for t in teams]), "team")
+    team_stack.w_max = np.array([t.value.w_max for t in teams])
+    sup_stack = _Stack(*_unique([s.value_fn for s in supervisors]), "supervisor")
     col = lambda values: np.array(values, dtype=float)[:, None, None]
-    team_args = (team_fns, team_of, col([t.alpha for t in teams]))
-    sup_args = (sup_fns, sup_of, col([s.mu for s in supervisors]), col([s.sigma for s in supervisors]))
+    team_args = (team_stack, col([t.alpha for t in teams]))
+    sup_args = (sup_stack, col([s.mu for s in supervisors]), col([s.sigma for s in supervisors]))
     rec = TeamingRecord() if record is not None else None
     every = max(1, int(round(0.25 / config.dt)))
     for step in range(int(round(config.duration / config.dt))):

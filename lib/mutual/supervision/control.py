@@ -7,17 +7,37 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dubins import SPEED, TRUE_W_MAX, _check_positive, check_states, dubins_step
-from .reachability import ValueFunction
-from .supervisor import approach_scenes
+from .dubins import SPEED, TRUE_W_MAX, _check_positive, _real, check_states, dubins_step
+from .supervisor import NoisySupervisor, _check_count, _check_rng, approach_scenes
+from .value_function import ValueFunction
+
+
+def _check_value_fn(value_fn, name="value_fn"):
+    if not isinstance(value_fn, ValueFunction):
+        raise ValueError(f"{name} must be a mutual.supervision.ValueFunction, got {type(value_fn).__name__}")
+    return value_fn
+
+
+def _check_lookahead(lookahead):
+    x = _real(lookahead)
+    if x is None or not np.isfinite(x) or x < 0:
+        raise ValueError(f"lookahead must be a non-negative finite number of seconds, got {lookahead!r}")
+    return x
 
 
 def _obstacle_frame(value_fn, states, obstacles):
     """Per robot: the state relative to its most dangerous obstacle, and V there."""
+    _check_value_fn(value_fn)
     s = check_states(states)
     if obstacles is None:
         return s, value_fn.interp(s, fill_value=np.inf)
-    centres = np.asarray(obstacles, dtype=float).reshape(-1, 2)
+    try:
+        centres = np.asarray(obstacles, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"obstacles must be a (k, 2) array of centres, got {obstacles!r}") from None
+    if centres.size and (centres.ndim > 2 or centres.shape[-1] != 2):
+        raise ValueError(f"obstacles must be a (k, 2) array of centres, got shape {centres.shape}")
+    centres = centres.reshape(-1, 2)
     if len(centres) == 0:
         return s, np.full(len(s), np.inf)
     if not np.all(np.isfinite(centres)):
@@ -31,10 +51,32 @@ def _obstacle_frame(value_fn, states, obstacles):
 
 
 def _check_alpha(alpha, n):
-    a = np.broadcast_to(np.asarray(alpha, dtype=float), (n,))
+    try:
+        a = np.broadcast_to(np.asarray(alpha, dtype=float), (n,))
+    except (TypeError, ValueError):
+        raise ValueError(f"alpha must be one finite number or one per robot ({n}), got {alpha!r}") from None
     if not np.all(np.isfinite(a)):
         raise ValueError(f"alpha must be finite, got {alpha!r}")
     return a
+
+
+def wilson_interval(rates, n, confidence=0.95):
+    """Wilson score interval ``(low, high)`` for observed rates (fractions of ``n`` trials, e.g. the
+    false-positive rates of ``n`` robots): the error bars of the chapter 4 figures."""
+    from scipy import stats
+
+    n = _check_count("n", n)
+    try:
+        r = np.atleast_1d(np.asarray(rates, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError(f"rates must be fractions in [0, 1], got {rates!r}") from None
+    if not np.all((r >= 0) & (r <= 1)):
+        raise ValueError(f"rates must be fractions in [0, 1], got {r.tolist()}")
+    c = _real(confidence)
+    if c is None or not 0 < c < 1:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+    ci = [stats.binomtest(int(round(x * n)), n).proportion_ci(confidence_level=c, method="wilson") for x in r]
+    return np.array([i.low for i in ci]), np.array([i.high for i in ci])
 
 
 def needs_override(value_fn, states, alpha, obstacles=None):
@@ -56,11 +98,16 @@ def filter_control(value_fn, states, nominal_u, alpha, u_max=None, obstacles=Non
     """
     rel, v = _obstacle_frame(value_fn, states, obstacles)
     a = _check_alpha(alpha, len(rel))
-    nominal = np.broadcast_to(np.asarray(nominal_u, dtype=float), (len(rel),))
+    try:
+        nominal = np.broadcast_to(np.asarray(nominal_u, dtype=float), (len(rel),))
+    except (TypeError, ValueError):
+        raise ValueError(f"nominal_u must be one turn rate or one per robot ({len(rel)}), got {nominal_u!r}") from None
     if not np.all(np.isfinite(nominal)):
         raise ValueError("nominal_u contains NaN or infinite entries")
-    if not np.isfinite(lookahead) or lookahead < 0:
-        raise ValueError(f"lookahead must be a non-negative finite number of seconds, got {lookahead!r}")
+    lookahead = _check_lookahead(lookahead)
+    _check_positive("speed", speed)
+    if u_max is not None:
+        _check_positive("u_max", u_max)
     override = v <= a
     if lookahead > 0:
         ahead = dubins_step(rel, nominal, lookahead, speed)
@@ -68,7 +115,7 @@ def filter_control(value_fn, states, nominal_u, alpha, u_max=None, obstacles=Non
     return np.where(override, value_fn.safe_control(rel, u_max), nominal)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class SafetyController:
     """A minimally invasive controller at level ``alpha`` of ``value_fn`` (see ``filter_control``)."""
     value_fn: ValueFunction
@@ -76,24 +123,33 @@ class SafetyController:
     u_max: float = None
     lookahead: float = 0.0
 
+    def __repr__(self):
+        u_max = "the model's" if self.u_max is None else f"{self.u_max:.4g}"
+        return (f"SafetyController(alpha={self.alpha:.4g}, u_max={u_max}, lookahead={self.lookahead:.4g} s, "
+                f"value_fn: w_max={self.value_fn.w_max:.4g}, {self.value_fn.method})")
+
     def __call__(self, states, nominal_u, obstacles=None):
         return filter_control(self.value_fn, states, nominal_u, self.alpha, self.u_max, obstacles, self.lookahead)
 
 
 def safety_controller(value_fn, alpha, u_max=None, lookahead=0.0):
     """The minimally invasive safety controller at level ``alpha`` (e.g. ``mu + 2 sigma``, Sec. 4.5)."""
-    if not isinstance(value_fn, ValueFunction):
-        raise ValueError("value_fn must be a mutual.supervision.reachability.ValueFunction")
-    _check_alpha(alpha, 1)
+    _check_value_fn(value_fn)
+    if np.ndim(alpha) != 0:
+        raise ValueError(f"alpha must be one finite number, got {alpha!r}")
+    alpha = float(_check_alpha(alpha, 1)[0])
     if u_max is not None:
-        _check_positive("u_max", u_max)
-    return SafetyController(value_fn, alpha, u_max, lookahead)
+        u_max = _check_positive("u_max", u_max)
+    return SafetyController(value_fn, alpha, u_max, _check_lookahead(lookahead))
 
 
 def simulate_filtered(controller, states, nominal_u, duration, dt=0.02, speed=SPEED, obstacles=None):
     """Roll robots forward under ``controller`` with constant ``nominal_u``: states (T+1, n, 3)."""
+    if not callable(controller):
+        raise ValueError(f"controller must be callable as controller(states, nominal_u, obstacles), got {controller!r}")
     _check_positive("duration", duration)
     _check_positive("dt", dt)
+    _check_positive("speed", speed)
     s = check_states(states)
     path = [s]
     for _ in range(int(np.ceil(duration / dt))):
@@ -102,7 +158,8 @@ def simulate_filtered(controller, states, nominal_u, duration, dt=0.02, speed=SP
     return np.stack(path)
 
 
-def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_distance, u_max=TRUE_W_MAX, dt=0.02):
+def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_distance, u_max=TRUE_W_MAX, dt=0.02,
+                         lowest_values=False):
     """Fraction of encounters in which ``supervisor`` intervenes on robots that *did* detect the obstacle.
 
     Each robot drives straight at the obstacle (``approach_scenes``) under the minimally invasive
@@ -110,9 +167,21 @@ def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_dist
     has passed; the supervisor judges each encounter once (one level ``mu - w``) and intervenes if
     the robot reaches it: every such intervention is a false positive (Sec. 4.5). The same robots and
     judgement levels serve every ``alpha`` (common random numbers). Returns
-    ``(rates (len(alphas),), closest margin to K over all robots)``.
+    ``(rates (len(alphas),), closest margin to K over all robots)``, and with ``lowest_values=True`` also
+    the lowest ``V_S`` each robot reached, ``(len(alphas), n_robots)`` (how far robots dip below a level).
     """
-    alphas = np.asarray(alphas, dtype=float).reshape(-1)
+    if not isinstance(supervisor, NoisySupervisor):
+        raise ValueError(f"supervisor must be a mutual.supervision.NoisySupervisor, got {type(supervisor).__name__}")
+    _check_value_fn(value_fn)
+    try:
+        alphas = np.asarray(alphas, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"alphas must be a sequence of finite levels, got {alphas!r}") from None
+    if len(alphas) == 0 or not np.all(np.isfinite(alphas)):
+        raise ValueError(f"alphas must be a non-empty sequence of finite levels, got {alphas.tolist()}")
+    n_robots = _check_count("n_robots", n_robots)
+    _check_rng(rng)
+    _check_positive("u_max", u_max)
     radius = value_fn.obstacle_radius
     starts = approach_scenes(n_robots, rng, radius, start_distance, dt=dt)[:, 0]
     states = np.tile(starts, (len(alphas), 1))
@@ -124,5 +193,8 @@ def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_dist
         states = dubins_step(states, u, dt)
         lowest = np.minimum(lowest, supervisor.value_fn.interp(states, fill_value=np.inf))
         closest = min(closest, float(np.min(np.hypot(states[:, 0], states[:, 1]) - radius)))
-    judged = lowest.reshape(len(alphas), n_robots) <= supervisor.thresholds(n_robots, rng)
+    lowest = lowest.reshape(len(alphas), n_robots)
+    judged = lowest <= supervisor.thresholds(n_robots, rng)
+    if lowest_values:
+        return judged.mean(axis=1), closest, lowest
     return judged.mean(axis=1), closest

@@ -18,6 +18,8 @@ driving straight): along a turning circle the closest point to the obstacle cent
 at distance ``| |c| - R |``, and it is reached before the car starts to move away.
 """
 
+import numbers
+
 import jax.numpy as jnp
 import numpy as np
 from hj_reachability import dynamics, sets
@@ -26,14 +28,28 @@ SPEED = 3.0  # eq. (5.1)
 TRUE_W_MAX = 1.0  # eq. (5.1)
 
 
+def _real(value):
+    """``value`` as a float if it is a real number (a 0-d array counts), else None."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        return None
+    return float(value)
+
+
 def _check_positive(name, value):
-    if not np.isfinite(value) or value <= 0:
+    x = _real(value)
+    if x is None or not np.isfinite(x) or x <= 0:
         raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    return x
 
 
 def check_states(states, name="states"):
     """Return ``states`` as a float array of shape (n, 3) or raise a ValueError naming ``name``."""
-    arr = np.asarray(states, dtype=float)
+    try:
+        arr = np.asarray(states, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers of shape (n, 3) for (x, y, theta), got {states!r}") from None
     if arr.ndim == 1 and arr.shape == (3,):
         arr = arr[None]
     if arr.ndim != 2 or arr.shape[1] != 3:
@@ -70,7 +86,14 @@ class DubinsCar(dynamics.ControlAndDisturbanceAffineDynamics):
 def keep_out_margin(states, radius):
     """The payoff ``l(x) = |p| - r`` of eq. (4.3): negative inside the disk K, positive outside."""
     _check_positive("radius", radius)
-    s = np.asarray(states, dtype=float)
+    try:
+        s = np.asarray(states, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"states must be an array of (x, y, theta) states, got {states!r}") from None
+    if s.ndim == 0 or s.shape[-1] != 3:
+        raise ValueError(f"states must have a last axis of length 3 for (x, y, theta), got shape {s.shape}")
+    if np.isnan(s).any():
+        raise ValueError("states contains NaN entries")
     return np.hypot(s[..., 0], s[..., 1]) - radius
 
 
@@ -100,6 +123,10 @@ def avoid_value_closed_form(states, w_max, radius, speed=SPEED, tol=1e-9):
 def rotate_to_heading(states, heading=0.0):
     """Rotate states about the obstacle centre so each faces ``heading``; V is invariant (a disk is round)."""
     s = check_states(states)
+    angle = _real(heading)
+    if angle is None or not np.isfinite(angle):
+        raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
+    heading = angle
     turn = heading - s[:, 2]
     c, sn = np.cos(turn), np.sin(turn)
     return np.stack([c * s[:, 0] - sn * s[:, 1], sn * s[:, 0] + c * s[:, 1], np.full(len(s), float(heading))], 1)
@@ -108,7 +135,12 @@ def rotate_to_heading(states, heading=0.0):
 def dubins_step(states, controls, dt, speed=SPEED):
     """Integrate eq. (5.1) exactly over ``dt`` with constant turn rates ``controls`` (vectorised over cars)."""
     s = check_states(states)
-    u = np.broadcast_to(np.asarray(controls, dtype=float), (len(s),))
+    _check_positive("dt", dt)
+    _check_positive("speed", speed)
+    try:
+        u = np.broadcast_to(np.asarray(controls, dtype=float), (len(s),))
+    except (TypeError, ValueError):
+        raise ValueError(f"controls must be one turn rate or one per state ({len(s)}), got {controls!r}") from None
     if not np.all(np.isfinite(u)):
         raise ValueError("controls contains NaN or infinite entries")
     theta = s[:, 2]

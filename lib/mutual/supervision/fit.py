@@ -3,22 +3,38 @@ eqs. 4.8-4.12): the library member, margin ``mu`` and noise ``sigma`` that make 
 intervention states most likely; and how often it recovers simulated supervisors."""
 
 import functools
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from .dubins import TRUE_W_MAX, check_states
-from .reachability import ValueLibrary, unsafe_set_contains
-from .supervisor import approach_scenes, NoisySupervisor
+from .control import wilson_interval
+from .dubins import TRUE_W_MAX, _check_positive, _real, check_states
+from .supervisor import NoisySupervisor, collect_interventions
+from .value_function import ValueFunction, ValueLibrary, unsafe_set_contains
+
+PRIORS = ("mle", "map")
 
 
-@dataclass(frozen=True, eq=False)
+class LibraryEdgeWarning(UserWarning):
+    """A supervisor fit sits on an edge of the library (or of the MAP prior's support): the best
+    model may lie beyond the members that were searched."""
+
+
+def _fmt(x):
+    return f"{x:.4g}"
+
+
+@dataclass(frozen=True, eq=False, repr=False)
 class SupervisorFit:
     """The fitted supervisor: the chosen member (eq. 4.12) with its ``mu*``, ``sigma*`` (eq. 4.8).
 
     Per-member arrays: ``mus``, ``sigmas`` and ``logliks`` (log of eq. 4.9; ``-inf`` where the
-    prior excludes the member), ``admissible`` (the prior's support).
+    prior excludes the member), ``admissible`` (the prior's support). ``boundary`` is ``None`` when
+    the chosen member has searched neighbours on both sides, ``"lowest"`` / ``"highest"`` when it is
+    the slowest / most agile member searched (the library's, or the MAP prior's, edge), ``"only"``
+    when a single member was searched; a :class:`LibraryEdgeWarning` says so when the fit is made.
     """
     library: ValueLibrary
     index: int
@@ -28,6 +44,15 @@ class SupervisorFit:
     admissible: np.ndarray
     n: int
     prior: str
+    boundary: str = None
+
+    def __repr__(self):
+        w = self.library.w_maxes
+        levels = ", ".join(f"{name}={_fmt(self.level(k))}" for name, k in (("mu", 0), ("mu+sigma", 1),
+                                                                           ("mu+2sigma", 2)))
+        return (f"SupervisorFit(w_max={_fmt(self.w_max)}, mu={_fmt(self.mu)}, sigma={_fmt(self.sigma)}, "
+                f"n={self.n}, prior={self.prior!r}, alpha levels: {levels}; library of {len(w)} members "
+                f"w_max {_fmt(w.min())}..{_fmt(w.max())} ({self.library.method}), boundary={self.boundary!r})")
 
     @property
     def w_max(self):
@@ -51,12 +76,20 @@ class SupervisorFit:
 
     def level(self, k=2.0):
         """The control level ``alpha = mu + k sigma`` of Sec. 4.5."""
-        return self.mu + k * self.sigma
+        k_value = _real(k)
+        if k_value is None or not np.isfinite(k_value):
+            raise ValueError(f"k must be a finite number, got {k!r}")
+        return self.mu + k_value * self.sigma
 
     def coverage(self, states, k=2.0):
         """Fraction of intervention ``states`` at or below ``alpha = mu + k sigma`` of the fitted member:
         the interventions a robot avoiding at ``alpha`` keeps clear of (Sec. 4.5; ~Phi(k) in expectation)."""
-        return float(np.mean(self.value_fn.interp(states) <= self.level(k)))
+        s = check_states(states)
+        values = self.value_fn.interp(s)
+        if np.isnan(values).any():
+            raise ValueError(f"states: {int(np.isnan(values).sum())} lie outside the library's grid "
+                             f"(|x|, |y| <= {self.library.grid_spec.half_width})")
+        return float(np.mean(values <= self.level(k)))
 
 
 def gaussian_mle(values):
@@ -72,9 +105,56 @@ def _max_loglik(var, p):
     return -0.5 * p * (np.log(2 * np.pi * var) + 1)
 
 
+def numerical_gaussian_fit(values, mu_min=None):
+    """A second algorithm for eqs. (4.8)-(4.9): maximise the Gaussian log-likelihood of each row of
+    ``values`` (b, p) numerically (scipy L-BFGS-B over ``mu`` and ``log sigma``) instead of by formula.
+
+    ``mu_min=None``: the MLE. ``mu_min=0``: the MAP estimate of Sec. 4.4 under the prior that is zero
+    for non-positive ``mu`` and uniform elsewhere (a bound ``mu >= 0``). Returns ``mu``, ``sigma`` and
+    the maximised log-likelihood per row.
+    """
+    from scipy import optimize
+
+    v = np.asarray(values, dtype=float)
+    if v.ndim != 2 or v.shape[1] < 2 or not np.all(np.isfinite(v)):
+        raise ValueError(f"values must be a finite (b, p >= 2) array, got shape {v.shape}")
+    out = []
+    for row in v:
+        scale = max(float(np.std(row)), 1e-12)
+
+        def negative_loglik(theta, row=row):
+            mu, log_sigma = theta
+            z = (row - mu) / np.exp(log_sigma)
+            nll = 0.5 * np.sum(z ** 2) + len(row) * (log_sigma + 0.5 * np.log(2 * np.pi))
+            grad = np.array([-np.sum(z) / np.exp(log_sigma), len(row) - np.sum(z ** 2)])
+            return nll, grad
+
+        # start away from the closed form (the median and twice the spread) so agreement is not by construction
+        start = np.array([float(np.median(row)) if mu_min is None else max(float(np.median(row)), mu_min + scale),
+                          np.log(2 * scale)])
+        bounds = [(mu_min, None), (None, None)]
+        res = optimize.minimize(negative_loglik, start, jac=True, method="L-BFGS-B", bounds=bounds,
+                                options={"ftol": 1e-15, "gtol": 1e-12, "maxiter": 10000})
+        out.append((res.x[0], np.exp(res.x[1]), -res.fun))
+    mus, sigmas, logliks = map(np.array, zip(*out))
+    return mus, sigmas, logliks
+
+
 @functools.lru_cache(maxsize=32)
 def _conservative_members(library, reference):
     return np.array([unsafe_set_contains(member, reference) for member in library])
+
+
+def _edge(index, admissible):
+    """Where ``index`` sits among the searched (admissible) members: None, lowest, highest or only."""
+    searched = np.flatnonzero(admissible)
+    if len(searched) == 1:
+        return "only"
+    if index == searched[0]:
+        return "lowest"
+    if index == searched[-1]:
+        return "highest"
+    return None
 
 
 def fit_supervisor(library, states, prior="mle", reference=None):
@@ -85,10 +165,12 @@ def fit_supervisor(library, states, prior="mle", reference=None):
     default the library member with ``w_max = 1``) unsafe set, and ``mu* = max(mu*, 0)`` with
     ``sigma*^2`` the mean squared deviation about it. Raises ValueError for fewer than two
     interventions, NaN, states outside the grid, or zero variance (an unbounded likelihood).
+    A fit on the slowest or most agile member searched warns (:class:`LibraryEdgeWarning`) and
+    says so in ``fit.boundary``: the supervisor may lie beyond the library's range.
     """
     if not isinstance(library, ValueLibrary):
-        raise ValueError("library must be a mutual.supervision.reachability.ValueLibrary")
-    if prior not in ("mle", "map"):
+        raise ValueError("library must be a mutual.supervision.ValueLibrary")
+    if not isinstance(prior, str) or prior not in PRIORS:
         raise ValueError(f"prior must be 'mle' or 'map', got {prior!r}")
     s = check_states(states)
     if len(s) < 2:
@@ -96,25 +178,43 @@ def fit_supervisor(library, states, prior="mle", reference=None):
     values = library.interp_all(s)
     outside = np.isnan(values[0])
     if outside.any():
-        raise ValueError(f"{outside.sum()} intervention states lie outside the library's grid "
+        raise ValueError(f"states: {outside.sum()} interventions lie outside the library's grid "
                          f"(|x|, |y| <= {library.grid_spec.half_width}), e.g. {s[outside][0].tolist()}")
     mus = values.mean(axis=1)
     if prior == "map":
-        reference = library[library.index_of(TRUE_W_MAX)] if reference is None else reference
+        if reference is None:
+            if not np.any(np.abs(library.w_maxes - TRUE_W_MAX) <= 1e-9):
+                raise ValueError(f"prior='map' needs reference= (the true dynamics' ValueFunction): the library "
+                                 f"has no member with w_max = {TRUE_W_MAX:g} to use by default")
+            reference = library[library.index_of(TRUE_W_MAX)]
+        if not isinstance(reference, ValueFunction) or reference.grid_spec != library.grid_spec:
+            raise ValueError("reference must be a ValueFunction on the library's grid")
         admissible = _conservative_members(library, reference)
         if not admissible.any():
             raise ValueError("no library member's unsafe set contains the reference unsafe set (MAP prior empty)")
         mus = np.maximum(mus, 0.0)
     else:
+        if reference is not None:
+            raise ValueError("reference is used only with prior='map'")
         admissible = np.ones(len(library), dtype=bool)
     var = np.mean((values - mus[:, None]) ** 2, axis=1)
     if np.any(var[admissible] <= 0):
         bad = library.w_maxes[admissible & (var <= 0)]
-        raise ValueError(f"interventions have zero variance under w_max={bad.tolist()}: the likelihood is "
-                         "unbounded; states must be distinct")
+        raise ValueError(f"states: the interventions have zero variance under w_max={bad.tolist()}: the "
+                         "likelihood is unbounded; states must be distinct")
     with np.errstate(divide="ignore"):
         logliks = np.where(admissible, _max_loglik(var, len(s)), -np.inf)
-    return SupervisorFit(library, int(np.argmax(logliks)), mus, np.sqrt(var), logliks, admissible, len(s), prior)
+    index = int(np.argmax(logliks))
+    boundary = _edge(index, admissible)
+    if boundary is not None:
+        searched = "the MAP prior's support" if prior == "map" and not admissible.all() else "the library"
+        what = {"lowest": "the slowest-turning member of", "highest": "the most agile member of",
+                "only": "the only member of"}[boundary]
+        warnings.warn(f"the supervisor fit sits on {what} {searched} (w_max = {library.w_maxes[index]:g}; searched "
+                      f"{library.w_maxes[admissible].min():g}..{library.w_maxes[admissible].max():g}): the best model "
+                      "may lie beyond the members searched; extend the library to check", LibraryEdgeWarning,
+                      stacklevel=2)
+    return SupervisorFit(library, index, mus, np.sqrt(var), logliks, admissible, len(s), prior, boundary)
 
 
 def recovery_study(library, generators, n_values, seeds, start_distance, prior="mle"):
@@ -122,24 +222,63 @@ def recovery_study(library, generators, n_values, seeds, start_distance, prior="
 
     ``generators``: ``(w_max, mu, sigma)`` triples (``w_max`` a library member). For each generator
     and seed, a supervisor watches Phase II ``approach_scenes`` until it has intervened
-    ``max(n_values)`` times; the fit uses its first ``n`` interventions. One row per
-    (generator, seed, n): the estimates and whether ``w_max`` was recovered exactly.
+    ``max(n_values)`` times (:func:`~mutual.supervision.supervisor.collect_interventions`); the fit
+    uses its first ``n`` interventions. One row per (generator, seed, n): the estimates, whether
+    ``w_max`` was recovered exactly, and ``boundary`` (the fit's library edge, or "").
     """
-    n_values = sorted(int(n) for n in n_values)
+    if not isinstance(library, ValueLibrary):
+        raise ValueError("library must be a mutual.supervision.ValueLibrary")
+    try:
+        n_values = sorted(int(n) for n in n_values if float(n) == int(n))
+    except (TypeError, ValueError):
+        raise ValueError(f"n_values must be integers >= 2, got {n_values!r}") from None
     if not n_values or n_values[0] < 2:
         raise ValueError(f"n_values must be integers >= 2, got {n_values!r}")
+    try:
+        generators = [tuple(g) for g in generators]
+    except TypeError:
+        raise ValueError(f"generators must be (w_max, mu, sigma) triples, got {generators!r}") from None
+    if not generators or any(len(g) != 3 for g in generators):
+        raise ValueError(f"generators must be a non-empty list of (w_max, mu, sigma) triples, got {generators!r}")
+    seeds = list(seeds)
+    if not seeds:
+        raise ValueError("seeds must hold at least one seed")
+    _check_positive("start_distance", start_distance)
     rows = []
     for w_max, mu, sigma in generators:
         sup = NoisySupervisor(library[library.index_of(w_max)], mu, sigma)
         for seed in seeds:
             rng = np.random.default_rng(seed)
-            states = np.empty((0, 3))
-            while len(states) < n_values[-1]:
-                more, _ = sup.first_interventions(
-                    approach_scenes(2 * n_values[-1], rng, library.obstacle_radius, start_distance), rng)
-                states = np.vstack([states, more])
+            states = collect_interventions(sup, n_values[-1], rng, start_distance)
             for n in n_values:
-                fit = fit_supervisor(library, states[:n], prior=prior)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", LibraryEdgeWarning)  # recorded in the table instead
+                    fit = fit_supervisor(library, states[:n], prior=prior)
                 rows.append({"w_max": w_max, "mu": mu, "sigma": sigma, "seed": seed, "n": n, "w_max_hat": fit.w_max,
-                             "mu_hat": fit.mu, "sigma_hat": fit.sigma, "recovered": fit.w_max == w_max})
+                             "mu_hat": fit.mu, "sigma_hat": fit.sigma, "recovered": fit.w_max == w_max,
+                             "boundary": fit.boundary or ""})
+    return pd.DataFrame(rows)
+
+
+def recovery_summary(table, confidence=0.95):
+    """Summarise a :func:`recovery_study` table per (sigma, n), for a table of SIMULATED supervisors.
+
+    Columns: ``data`` ("simulated"), ``sigma``, ``n``, ``runs`` (generators x seeds), ``recovered``
+    (fraction choosing the generating ``w_max``) with its Wilson ``confidence`` interval
+    (``recovered_ci_low``, ``recovered_ci_high``), ``mean_w_max_error`` with its standard error
+    (``w_max_error_se``), ``mean_abs_mu_error`` and ``mean_sigma_ratio`` (``sigma_hat / sigma``).
+    """
+    needed = {"w_max", "mu", "sigma", "n", "w_max_hat", "mu_hat", "sigma_hat", "recovered"}
+    if not isinstance(table, pd.DataFrame) or needed - set(table.columns):
+        raise ValueError(f"table must be a recovery_study DataFrame with columns {sorted(needed)}")
+    rows = []
+    for (sigma, n), part in table.groupby(["sigma", "n"]):
+        k, runs = int(part["recovered"].sum()), len(part)
+        (low,), (high,) = wilson_interval(k / runs, runs, confidence)
+        error = part["w_max_hat"] - part["w_max"]
+        rows.append({"data": "simulated", "sigma": sigma, "n": n, "runs": runs, "recovered": k / runs,
+                     "recovered_ci_low": low, "recovered_ci_high": high,
+                     "mean_w_max_error": error.mean(), "w_max_error_se": error.std(ddof=1) / np.sqrt(runs),
+                     "mean_abs_mu_error": (part["mu_hat"] - part["mu"]).abs().mean(),
+                     "mean_sigma_ratio": (part["sigma_hat"] / part["sigma"]).mean()})
     return pd.DataFrame(rows)

@@ -19,14 +19,16 @@ obstacle_y     float   (optional, default 0)
 =============  ======  =========================================================================
 """
 
+import csv
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from .dubins import SPEED, _check_positive, check_states
-from .reachability import ValueFunction
+from .dubins import SPEED, _check_positive, _real, check_states
+from .value_function import ValueFunction
 
 REQUIRED_COLUMNS = ("participant", "trial", "time", "x", "y", "theta")
 OPTIONAL_COLUMNS = ("obstacle_x", "obstacle_y")
@@ -36,9 +38,23 @@ def _wrap(theta):
     return (np.asarray(theta, dtype=float) + np.pi) % (2 * np.pi) - np.pi
 
 
+def _check_rng(rng):
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {rng!r}")
+    return rng
+
+
+def _check_count(name, n, minimum=1):
+    """``n`` as an int if it is a whole number >= ``minimum`` (``40.0`` counts), else a ValueError."""
+    x = _real(n)
+    if x is None or not np.isfinite(x) or x != int(x) or x < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {n!r}")
+    return int(x)
+
+
 # ---------------------------------------------------------------------------- Sec. 4.3: the supervisor
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class NoisySupervisor:
     """Intervenes when ``V_S(x) + w <= mu``, ``w ~ N(0, sigma^2)`` per safety judgement (Sec. 4.3).
 
@@ -50,15 +66,24 @@ class NoisySupervisor:
 
     def __post_init__(self):
         if not isinstance(self.value_fn, ValueFunction):
-            raise ValueError("value_fn must be a mutual.supervision.reachability.ValueFunction")
-        if not np.isfinite(self.mu):
-            raise ValueError(f"mu must be finite, got {self.mu!r}")
-        if not np.isfinite(self.sigma) or self.sigma < 0:
+            raise ValueError("value_fn must be a mutual.supervision.ValueFunction")
+        mu, sigma = _real(self.mu), _real(self.sigma)
+        if mu is None or not np.isfinite(mu):
+            raise ValueError(f"mu must be a finite number, got {self.mu!r}")
+        if sigma is None or not np.isfinite(sigma) or sigma < 0:
             raise ValueError(f"sigma must be a non-negative finite number, got {self.sigma!r}")
+        object.__setattr__(self, "mu", mu)
+        object.__setattr__(self, "sigma", sigma)
+
+    def __repr__(self):
+        vf = self.value_fn
+        return (f"NoisySupervisor(w_max={vf.w_max:.4g}, mu={self.mu:.4g}, sigma={self.sigma:.4g}; value function: "
+                f"{vf.method}, obstacle_radius={vf.obstacle_radius:.4g}, grid {vf.grid_spec.describe()})")
 
     def thresholds(self, n, rng):
         """``n`` judgement levels ``mu - w`` (intervene when ``V_S(x) <= level``)."""
-        return self.mu - self.sigma * rng.standard_normal(n)
+        n = _check_count("n", n, minimum=0)
+        return self.mu - self.sigma * _check_rng(rng).standard_normal(n)
 
     def intervenes(self, states, rng=None, thresholds=None):
         """Whether the supervisor intervenes at each state (n, 3) -> bool (n,).
@@ -71,7 +96,13 @@ class NoisySupervisor:
             if rng is None:
                 raise ValueError("intervenes needs rng (fresh noise per judgement) or thresholds")
             thresholds = self.thresholds(len(s), rng)
-        thresholds = np.broadcast_to(np.asarray(thresholds, dtype=float), (len(s),))
+        try:
+            thresholds = np.broadcast_to(np.asarray(thresholds, dtype=float), (len(s),))
+        except (TypeError, ValueError):
+            raise ValueError(f"thresholds must be one number or one per state ({len(s)}), got "
+                             f"shape {np.shape(thresholds)}") from None
+        if np.isnan(thresholds).any():
+            raise ValueError("thresholds contain NaN")
         return self.value_fn.interp(s, fill_value=np.inf) <= thresholds
 
     def first_interventions(self, trajectories, rng):
@@ -84,6 +115,9 @@ class NoisySupervisor:
         traj = np.asarray(trajectories, dtype=float)
         if traj.ndim != 3 or traj.shape[2] != 3 or traj.shape[1] < 2:
             raise ValueError(f"trajectories must have shape (k, T >= 2, 3), got {traj.shape}")
+        if not np.all(np.isfinite(traj)):
+            raise ValueError("trajectories contain NaN or infinite entries")
+        _check_rng(rng)
         k, t_len, _ = traj.shape
         values = self.value_fn.interp(traj.reshape(-1, 3), fill_value=np.inf).reshape(k, t_len)
         levels = self.thresholds(k, rng)
@@ -100,6 +134,30 @@ class NoisySupervisor:
         return states, scenes
 
 
+def collect_interventions(supervisor, n, rng, start_distance, dt=0.02, batch=None, max_scenes=None):
+    """The first ``n`` intervention states (n, 3) of ``supervisor`` watching Phase II ``approach_scenes``.
+
+    Scenes are drawn in batches of ``batch`` (default ``2 n``) until ``n`` interventions are collected;
+    raises a ValueError (rather than looping forever) if ``max_scenes`` (default ``50 n``) scenes give fewer.
+    """
+    if not isinstance(supervisor, NoisySupervisor):
+        raise ValueError("supervisor must be a mutual.supervision.NoisySupervisor")
+    n = _check_count("n", n)
+    batch = 2 * n if batch is None else _check_count("batch", batch)
+    max_scenes = 50 * n if max_scenes is None else _check_count("max_scenes", max_scenes)
+    states, watched = np.empty((0, 3)), 0
+    while len(states) < n:
+        if watched >= max_scenes:
+            raise ValueError(f"the supervisor intervened only {len(states)} times in {watched} scenes (need n={n}): "
+                             f"with mu={supervisor.mu:g}, sigma={supervisor.sigma:g} it rarely judges an approach "
+                             "unsafe")
+        size = min(batch, max_scenes - watched)
+        more, _ = supervisor.first_interventions(
+            approach_scenes(size, rng, supervisor.value_fn.obstacle_radius, start_distance, dt=dt), rng)
+        states, watched = np.vstack([states, more]), watched + size
+    return states[:n]
+
+
 def approach_scenes(n, rng, obstacle_radius, start_distance, speed=SPEED, dt=0.02):
     """``n`` Phase II scenes (Sec. 5.2.1): a car drives straight at the obstacle and would crash.
 
@@ -107,13 +165,14 @@ def approach_scenes(n, rng, obstacle_radius, start_distance, speed=SPEED, dt=0.0
     uniformly within 0.9 of the obstacle radius sideways of the centre; returns (n, T, 3) states
     sampled every ``dt`` until the car would reach the centre's distance.
     """
+    n = _check_count("n", n)
+    _check_rng(rng)
     _check_positive("obstacle_radius", obstacle_radius)
     _check_positive("start_distance", start_distance)
+    _check_positive("speed", speed)
     _check_positive("dt", dt)
     if start_distance <= obstacle_radius:
         raise ValueError(f"start_distance={start_distance} must exceed obstacle_radius={obstacle_radius}")
-    if int(n) != n or n < 1:
-        raise ValueError(f"n must be a positive integer, got {n!r}")
     bearing = rng.uniform(-np.pi, np.pi, n)
     start = start_distance * np.stack([np.cos(bearing), np.sin(bearing)], axis=1)
     offset = 0.9 * obstacle_radius * rng.uniform(-1, 1, n)
@@ -127,37 +186,105 @@ def approach_scenes(n, rng, obstacle_radius, start_distance, speed=SPEED, dt=0.0
 
 # ---------------------------------------------------------------------------- the interventions CSV
 
-def validate_interventions(frame):
-    """Check an interventions table (module docstring) and return a clean copy (types, wrapped theta)."""
+def _row(frame, i, source):
+    """How to point a reader at positional row ``i``: the file's row and line, or the frame's index label."""
+    if source is not None:
+        lines = frame.attrs.get("lines")
+        line = lines[i] if lines is not None else i + 2
+        return f"row {i + 1} (line {line} of the file)"
+    return f"row {frame.index[i]!r}"
+
+
+def _cell_text(value):
+    if isinstance(value, float) and np.isnan(value):
+        return ""
+    return str(value).strip()
+
+
+def _numbers(frame, col, source, where):
+    """Column ``col`` as finite floats, or a ValueError naming the first bad row and its text."""
+    raw = frame[col]
+    texts = raw.map(_cell_text) if raw.dtype == object else raw
+    values = pd.to_numeric(texts, errors="coerce").to_numpy(dtype=float)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if len(bad):
+        i = bad[0]
+        text = _cell_text(raw.iloc[i])
+        reason = "is empty" if text == "" else f"{text!r} is not a finite number"
+        more = f" ({len(bad) - 1} more rows like it)" if len(bad) > 1 else ""
+        raise ValueError(f"{where}{_row(frame, i, source)}, column {col!r}: {reason}{more}")
+    return values
+
+
+def validate_interventions(frame, source=None):
+    """Check an interventions table (module docstring) and return a clean copy (types, wrapped theta).
+
+    Errors name the table (``source``, e.g. the CSV's path), the row and the column.
+    """
+    where = f"{source}: " if source is not None else "interventions: "
     if not isinstance(frame, pd.DataFrame):
-        raise ValueError("interventions must be a pandas DataFrame")
-    missing = [c for c in REQUIRED_COLUMNS if c not in frame.columns]
+        raise ValueError(f"{where}interventions must be a pandas DataFrame, got {type(frame).__name__}")
+    columns = [str(c) for c in frame.columns]
+    missing = [c for c in REQUIRED_COLUMNS if c not in columns]
     if missing:
-        raise ValueError(f"interventions lack the columns {missing} (required: {list(REQUIRED_COLUMNS)})")
-    extra = [c for c in frame.columns if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
+        raise ValueError(f"{where}missing column{'s' if len(missing) > 1 else ''} {', '.join(map(repr, missing))} "
+                         f"(required: {', '.join(REQUIRED_COLUMNS)}; optional: {', '.join(OPTIONAL_COLUMNS)})")
+    extra = [c for c in columns if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
     if extra:
-        raise ValueError(f"interventions have unknown columns {extra}")
-    out = pd.DataFrame({"participant": frame["participant"].astype(str)})
-    if frame["participant"].isna().any() or (out["participant"].str.len() == 0).any():
-        raise ValueError("interventions column 'participant' has empty entries")
-    trial = pd.to_numeric(frame["trial"], errors="coerce")
-    if trial.isna().any() or (trial < 0).any() or (trial != np.round(trial)).any():
-        raise ValueError("interventions column 'trial' must hold non-negative integers")
+        raise ValueError(f"{where}unknown column{'s' if len(extra) > 1 else ''} {', '.join(map(repr, extra))} "
+                         f"(allowed: {', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)})")
+    if len(set(columns)) != len(columns):
+        raise ValueError(f"{where}repeated column names {columns}")
+    lines = frame.attrs.get("lines")
+    frame = frame.set_axis(columns, axis=1)
+    frame.attrs["lines"] = lines
+    if len(frame) == 0:
+        raise ValueError(f"{where}holds no interventions (a header but no rows)")
+    participant = frame["participant"].map(_cell_text)
+    empty = np.flatnonzero(participant.to_numpy() == "")
+    if len(empty):
+        raise ValueError(f"{where}{_row(frame, empty[0], source)}, column 'participant': is empty")
+    out = pd.DataFrame({"participant": participant.to_numpy()})
+    trial = _numbers(frame, "trial", source, where)
+    bad = np.flatnonzero((trial < 0) | (trial != np.round(trial)))
+    if len(bad):
+        raise ValueError(f"{where}{_row(frame, bad[0], source)}, column 'trial': {trial[bad[0]]:g} is not a "
+                         "non-negative integer")
     out["trial"] = trial.astype(int)
     for col in ("time", "x", "y", "theta") + OPTIONAL_COLUMNS:
-        vals = pd.to_numeric(frame[col], errors="coerce") if col in frame else pd.Series(0.0, index=frame.index)
-        if not np.all(np.isfinite(vals.to_numpy(dtype=float))):
-            raise ValueError(f"interventions column {col!r} must hold finite numbers")
-        out[col] = vals.astype(float)
-    if (out["time"] < 0).any():
-        raise ValueError("interventions column 'time' must be non-negative")
+        out[col] = _numbers(frame, col, source, where) if col in frame else 0.0
+    bad = np.flatnonzero(out["time"].to_numpy() < 0)
+    if len(bad):
+        raise ValueError(f"{where}{_row(frame, bad[0], source)}, column 'time': {out['time'].iloc[bad[0]]:g} is "
+                         "negative (seconds since the scene started)")
     out["theta"] = _wrap(out["theta"])
-    return out.reset_index(drop=True)
+    return out
 
 
 def read_interventions(path):
-    """Read and validate an interventions CSV."""
-    return validate_interventions(pd.read_csv(path, dtype={"participant": str}))
+    """Read and validate an interventions CSV (module docstring); errors name the file, row and column."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such interventions file")
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
+            reader = csv.reader(handle, skipinitialspace=True)
+            rows = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path}: not a text CSV file ({err.reason} at byte {err.start})") from None
+    except csv.Error as err:
+        raise ValueError(f"{path}: not a well-formed CSV ({err})") from None
+    if not rows:
+        raise ValueError(f"{path}: the file is empty (expected a header line: {','.join(REQUIRED_COLUMNS)})")
+    (_, header), body = rows[0], rows[1:]
+    header = [name.strip() for name in header]
+    for line, row in body:
+        if len(row) != len(header):
+            raise ValueError(f"{path}: not a well-formed CSV (line {line} has {len(row)} fields, the header "
+                             f"has {len(header)})")
+    frame = pd.DataFrame([row for _, row in body], columns=header, dtype=object)
+    frame.attrs["lines"] = [line for line, _ in body]
+    return validate_interventions(frame, source=path)
 
 
 def write_interventions(frame, path):

@@ -1,0 +1,235 @@
+"""Fault tests (issue 13): a notebook that raises, a killed kernel, SIGTERM during a run, a kernel that
+will not stop, a missing notebook, stale and quick results, two report builds at once. Each asserts
+what the user sees (one line naming the notebook and the cell, no traceback) and that no file is
+lost or half-written. Tiny synthetic notebooks in temporary folders keep them fast."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import nbformat
+import pytest
+
+import mutual.compendium.paths as paths
+import mutual.compendium.runs as runs
+from mutual.compendium.report import build_report, main as report_main
+from mutual.compendium.results import write_extensions, write_results
+
+WRITE_AND_WAIT = """import os, time
+from mutual.atomic import atomic_path
+from mutual.compendium.paths import figures_dir
+(figures_dir() / "kernel.pid").write_text(str(os.getpid()))
+with atomic_path(figures_dir() / "fig_9_9.png") as tmp:
+    tmp.write_text("half")
+    {wait}"""
+PATIENT = "time.sleep(120)"
+STUBBORN = """for _ in range(1200):
+        try:
+            time.sleep(0.1)
+        except KeyboardInterrupt:
+            pass"""
+
+
+def _notebook(folder, name, *sources):
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["kernelspec"] = {"name": "mutual", "display_name": "Python (mutual)", "language": "python"}
+    nb.cells = [nbformat.v4.new_code_cell(s) for s in ("quick = False",) + sources]
+    nb.cells[0].metadata["tags"] = ["parameters"]
+    path = Path(folder) / f"{name}.ipynb"
+    nbformat.write(nb, path)
+    return path
+
+
+@pytest.fixture
+def out(tmp_path):
+    """An output folder holding a good figure and the previous results of ``99_fault``."""
+    folder = tmp_path / "out"
+    (folder / "results" / "extensions").mkdir(parents=True)
+    (folder / "fig_9_9.png").write_text("the good figure")
+    for sub in ("results", "results/extensions"):
+        (folder / sub / "99_fault.json").write_text('{"notebook": "99_fault", "claims": {}}')
+    return folder
+
+
+def _runner(notebook, out, *args):
+    env = {**os.environ, "MUTUAL_OUTPUT_DIR": str(out)}
+    return subprocess.Popen([sys.executable, "-m", "mutual.compendium.notebooks", *args, str(notebook)],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _leftovers(folder):
+    return sorted(p.name for p in Path(folder).rglob(".*") if p.is_file())
+
+
+def _wait_for(condition, seconds=60):
+    end = time.time() + seconds
+    while time.time() < end:
+        if condition():
+            return True
+        time.sleep(0.1)
+    return False
+
+
+def _gone(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def _one_line(stderr):
+    lines = [ln for ln in stderr.strip().splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in stderr, f"expected one line, got:\n{stderr}"
+    return lines[0]
+
+
+def test_a_notebook_that_raises_leaves_no_results(tmp_path, out):
+    path = _notebook(tmp_path, "99_fault", "x = 1", "raise RuntimeError('boom')")
+    proc = _runner(path, out)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1
+    line = _one_line(stderr)
+    assert "99_fault.ipynb failed in code cell 3 (\"raise RuntimeError('boom')\"): RuntimeError: boom" in line
+    assert not (out / "results" / "99_fault.json").exists(), "stale results of the failed notebook remain"
+    assert not (out / "results" / "extensions" / "99_fault.json").exists()
+    assert (out / "fig_9_9.png").read_text() == "the good figure"
+    executed = nbformat.read(out / "executed" / "99_fault.ipynb", as_version=4)
+    assert executed.cells[2].outputs[0]["ename"] == "RuntimeError"  # the traceback is kept there
+
+
+def test_results_written_before_a_failure_are_removed(tmp_path, out):
+    path = _notebook(tmp_path, "99_fault", "from mutual.compendium.results import write_extensions\n"
+                     "write_extensions('99_fault', {'k': {'statement': 's', 'value': 1, "
+                     "'computed_by': 'mutual.study.stats.rm_anova'}})", "1 / 0")
+    proc = _runner(path, out)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1 and "ZeroDivisionError" in _one_line(stderr)
+    assert not (out / "results" / "extensions" / "99_fault.json").exists()
+
+
+def test_a_killed_kernel_is_named(tmp_path, out):
+    path = _notebook(tmp_path, "99_fault", "import os, signal\nos.kill(os.getpid(), signal.SIGKILL)")
+    proc = _runner(path, out)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1
+    line = _one_line(stderr)
+    assert "notebook 99_fault.ipynb, code cell 2 ('import os, signal'): the kernel died (killed by SIGKILL" in line
+    assert not (out / "results" / "99_fault.json").exists()
+    assert _leftovers(out) == []
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_a_signal_stops_the_run_cleanly(tmp_path, out, signum):
+    """The running cell is interrupted, so its atomic write cleans up; the kernel is shut down."""
+    path = _notebook(tmp_path, "99_fault", WRITE_AND_WAIT.format(wait=PATIENT))
+    proc = _runner(path, out)
+    assert _wait_for(lambda: any(p.name.startswith(".fig_9_9") for p in out.iterdir())), proc.communicate()
+    proc.send_signal(signum)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signum
+    line = _one_line(stderr)
+    name = signal.Signals(signum).name
+    assert f"stopped by {name} in notebook 99_fault.ipynb, code cell 2 ('import os, time'); it left no results" in line
+    assert "temporary" not in line  # the interrupted cell removed its own temporary file
+    assert _leftovers(out) == [], "temporary files left behind"
+    assert (out / "fig_9_9.png").read_text() == "the good figure", "the previous figure was lost or half-written"
+    assert not (out / "results" / "99_fault.json").exists()
+    assert _wait_for(lambda: _gone(int((out / "kernel.pid").read_text())), 10), "the kernel is still running"
+
+
+def test_a_second_signal_kills_a_kernel_that_will_not_stop(tmp_path, out):
+    """A cell that swallows KeyboardInterrupt: the second SIGTERM kills the kernel, and the runner removes
+    the temporary file it left."""
+    path = _notebook(tmp_path, "99_fault", WRITE_AND_WAIT.format(wait=STUBBORN))
+    proc = _runner(path, out)
+    assert _wait_for(lambda: any(p.name.startswith(".fig_9_9") for p in out.iterdir())), proc.communicate()
+    proc.send_signal(signal.SIGTERM)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM
+    assert "stopped by SIGTERM in notebook 99_fault.ipynb, code cell 2" in _one_line(stderr)
+    assert "removed 1 temporary file(s) the kernel left" in stderr
+    assert _leftovers(out) == [] and (out / "fig_9_9.png").read_text() == "the good figure"
+    assert _wait_for(lambda: _gone(int((out / "kernel.pid").read_text())), 10), "the kernel is still running"
+
+
+def test_a_missing_notebook_is_one_line(tmp_path, out):
+    proc = _runner(tmp_path / "99_nope.ipynb", out)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 1 and "no notebook at" in _one_line(stderr) and "99_nope.ipynb" in stderr
+
+
+# -- the report: stale results, quick results, concurrent builds ---------------------------------------
+
+@pytest.fixture
+def ran(tmp_path, monkeypatch):
+    """Results of ``09_demo`` written in-process as a full run of a notebook in ``tmp_path``."""
+    monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(tmp_path / "figures"))
+    notebook = _notebook(tmp_path, "09_demo", "x = 1")
+
+    def write(mode="full"):
+        for key, value in runs.kernel_env(notebook, {} if mode == "full" else {"quick": True}).items():
+            monkeypatch.setenv(key, value)
+        write_results("09_demo", {"c2-alg3-equals-alg4": {"value": True, "note": "n", "computed_by":
+                                                          "mutual.study.stats.rm_anova"}})
+        write_extensions("09_demo", {"k": {"statement": "s", "value": 1, "computed_by": "mutual.study.stats.rm_anova"}})
+        return notebook
+
+    return write
+
+
+def test_the_report_refuses_results_older_than_their_notebook(ran, capsys):
+    notebook = ran()
+    assert "| c2-alg3-equals-alg4 |" in build_report().read_text()
+    nb = nbformat.read(notebook, as_version=4)
+    nb.cells[1].source = "x = 2"
+    nbformat.write(nb, notebook)
+    with pytest.raises(SystemExit) as exit_:
+        report_main([])
+    assert exit_.value.code != 0
+    assert "results/09_demo.json: older than its notebook" in str(exit_.value.code)
+    assert "09_demo.ipynb (its code changed after the run)" in str(exit_.value.code)
+    notebook.unlink()
+    with pytest.raises(ValueError, match="09_demo.ipynb no longer exists"):
+        build_report()
+
+
+def test_the_report_refuses_results_without_a_run_record(ran):
+    ran()
+    path = Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "results" / "09_demo.json"
+    doc = json.loads(path.read_text())
+    del doc["run"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match="results/09_demo.json: written before runs were recorded"):
+        build_report()
+
+
+def test_the_committed_report_refuses_quick_results(ran, monkeypatch, tmp_path):
+    ran(mode="quick")
+    text = build_report().read_text()  # a scratch report: allowed, and says so
+    assert "**Not the committed report**" in text and "09_demo (quick)" in text
+    monkeypatch.setattr(paths, "FIGURES", tmp_path / "figures")  # now the output folder is "committed"
+    with pytest.raises(ValueError, match="written by a quick run of .*09_demo.ipynb; the committed report takes full"):
+        build_report()
+    ran(mode="full")
+    assert "Not the committed report" not in build_report().read_text()
+
+
+def test_two_report_builds_at_once(tmp_path, monkeypatch):
+    """Two builds into one folder at once: each finishes, and the report is whole (atomic replace)."""
+    out = tmp_path / "figures"
+    monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(out))
+    reference = build_report().read_text()
+    command = [sys.executable, "-m", "mutual.compendium.report"]
+    procs = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    for proc in procs:
+        _, stderr = proc.communicate(timeout=120)
+        assert proc.returncode == 0, stderr
+    assert (out / "REPRODUCTION.md").read_text() == reference
+    assert _leftovers(out) == []
