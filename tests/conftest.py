@@ -28,7 +28,6 @@ from mutual.compendium.paths import NOTEBOOKS, results_dir  # noqa: E402
 # set only shrinks.
 AWAITING_PROVENANCE = {
     "01_constraint_inference", "02_chance_thresholds",
-    "06_evident_safety",
 }
 
 _PROVENANCE_SHIM = textwrap.dedent('''

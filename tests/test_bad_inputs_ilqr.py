@@ -65,7 +65,7 @@ CASES = [
     (es.EvidentSafetyTask, (), {**SMALL, "steps": 2.5}, ValueError, "steps must be a positive integer"),
     (TASK.params, ([1.0, 2.0],), {}, ValueError, "weights must be 4 finite numbers"),
     (es.figure_scenario, ("9.9",), {}, ValueError, "figure must be"),
-    (es.legible_weights, (W1, W0, np.nan), {}, ValueError, "alpha must be finite"),
+    (es.legible_weights, (W1, W0, np.nan), {}, ValueError, "alpha must be a finite number"),
     (es.solve, (TASK, es.legible_weights(W1, W0, 0.02)), {}, ILQRError, "unbounded"),
     (es.solve_batch, ([TASK, TASK], [W0, W1, W1]), {}, ValueError, "same number of problems"),
     (es.solve_batch, ([], W0), {}, ValueError, "tasks must be an EvidentSafetyTask"),
