@@ -10,14 +10,24 @@ only time (and, to bound memory, blocks of candidates) is looped over.
 * :func:`value_ratio` -- Algorithm 3 (Theorem 2.3.1: log F_{C+} by a modified backup).
 * :func:`log_partition` -- Algorithm 4 (the pure soft backup: log Z_{C+} = V_{C+,0}).
 * :func:`rank_candidates` -- log F and the exact likelihood gain of every candidate.
+
+Algorithm 4 runs on one of two engines: ``"jax"``, the compiled stencil backup of
+:mod:`.fast` (grids: successors at a few fixed index offsets), or ``"numpy"``, a log-space
+backup with a (sparse) matrix product per step that takes any MDP. ``engine="auto"`` (the
+default) uses jax where it applies; the tests check that both give the same numbers.
 """
 
 import numpy as np
+import scipy.sparse as sp
 
+from . import fast
+from .demonstrations import check_demonstrations
+from . import mdp as _mdp
 from .mdp import check_mask, expected_next, masked_logsumexp, soft_bellman_backup, soft_policy
 
 
 _BLOCK_ENTRIES = 2 ** 22  # bound on X * A * (candidates per block): 32 MiB of float64
+ENGINES = ("auto", "jax", "numpy")
 
 
 def _masks(mdp, masks):
@@ -30,13 +40,38 @@ def _blocks(mdp, n):
     return [slice(i, min(i + size, n)) for i in range(0, n, size)]
 
 
-def log_partition(mdp, masks):
+def log_partition(mdp, masks, engine="auto"):
     """Algorithm 4: log Z_{C,0}(x) = V^soft_{C,0}(x) for every candidate mask (eq. 2.24).
 
     ``masks``: Phi_C as (X, A) or (X, A, K). Returns (X, K) (K = 1 for one mask).
     The backup runs in log space, so long horizons and large rewards are safe.
+    ``engine``: "auto", "jax" (compiled, grids only) or "numpy" (module docstring).
     """
-    return _batched_backup(mdp, _masks(mdp, masks))[0]
+    return _batched_backup(mdp, _masks(mdp, masks), engine=engine)[0]
+
+
+def _engine_form(mdp, engine):
+    """The stencil form for the compiled engine, or None for the numpy one."""
+    if engine not in ENGINES:
+        raise ValueError(f"engine: must be one of {ENGINES}, got {engine!r}")
+    form = None if engine == "numpy" else fast.stencil_form(mdp)
+    if engine == "jax" and form is None:
+        raise ValueError("engine: the compiled backup needs successors at <= 27 fixed index offsets, "
+                         "transition probabilities >= 1e-140 and jax installed; use engine='numpy'")
+    return form
+
+
+def backup_columns(mdp, masks_of, n, demos=None, engine="auto"):
+    """Algorithm 4 for ``n`` candidates whose masks Phi_C (X, A, k) ``masks_of(block)`` returns
+    for a slice of them, block by block so memory stays bounded: ``(V0 (X, n), log_lik (n,))``,
+    the log-likelihood of ``demos`` under each (eq. 2.19; -inf where infeasible, 0 without demos)."""
+    form = _engine_form(mdp, engine)
+    if form is not None:
+        return fast.backup_blocks(mdp, form, lambda b: masks_of(b) & mdp.allowed[:, :, None], n, demos)
+    V0, log_lik = np.empty((mdp.n_states, n)), np.empty(n)
+    for block in _blocks(mdp, n):
+        V0[:, block], log_lik[block] = _numpy_backup(mdp, masks_of(block) & mdp.allowed[:, :, None], demos)
+    return V0, log_lik
 
 
 def log_partition_literal(mdp, masks):
@@ -45,6 +80,7 @@ def log_partition_literal(mdp, masks):
     The reference the vectorized :func:`log_partition` is tested and benchmarked
     against; far too slow for real use (``O(T |X|^2 |A|)`` Python steps).
     """
+    masks = _masks(mdp, masks)
     S, K = mdp.dense_transitions(), masks.shape[2]
     Z = np.exp(mdp.terminal_reward)[:, None] * np.ones(K)
     for _ in range(mdp.horizon):
@@ -53,35 +89,47 @@ def log_partition_literal(mdp, masks):
             for a in range(mdp.n_actions):
                 Q = mdp.reward[x, a] * np.ones(K)
                 for x2 in range(mdp.n_states):
-                    Q += S[x, a, x2] * np.log(Z[x2])
+                    if S[x, a, x2] > 0:     # 0 log 0 = 0: an unreachable x' adds nothing
+                        Q += S[x, a, x2] * np.log(Z[x2])
                 Z_new[x] += masks[x, a] * np.exp(Q)
         Z = Z_new
     return np.log(Z)
 
 
-def _batched_backup(mdp, masks, demos=None):
-    """Algorithm 4 over blocks of candidates; with ``demos`` also each candidate's
+def _batched_backup(mdp, masks, demos=None, engine="auto"):
+    """Algorithm 4 for the (X, A, K) ``masks`` (see :func:`backup_columns`)."""
+    return backup_columns(mdp, lambda block: masks[:, :, block], masks.shape[2], demos, engine)
+
+
+def _expected_next(mdp, V):
+    """:func:`expected_next` with one product with S per step: -inf is carried as the finite
+    ``fast.LOW`` (exact when every positive S >= fast.MIN_PROBABILITY; see :mod:`.fast`)."""
+    if not fast.sentinel_is_exact(mdp):
+        return expected_next(mdp, V)
+    Q = _mdp._times_transitions(mdp, np.maximum(V, fast.LOW)).reshape((mdp.n_states, mdp.n_actions) + V.shape[1:])
+    Q[Q < fast.DEAD] = -np.inf
+    return Q
+
+
+def _numpy_backup(mdp, masks, demos=None):
+    """Algorithm 4 in numpy for one block of masks; with ``demos`` also each candidate's
     demonstration log-likelihood sum_i sum_t log P_C(a_t | x_t, t) (eq. 2.19), gathered
     from the same pass (-inf where a demonstration is infeasible)."""
-    K = masks.shape[2]
-    V0, log_lik = np.empty((mdp.n_states, K)), np.zeros(K)
-    reward = mdp.reward[:, :, None]
-    for block in _blocks(mdp, K):
-        forbidden = ~masks[:, :, block]
-        V = np.repeat(mdp.terminal_reward[:, None], forbidden.shape[2], axis=1)
-        for t in range(mdp.horizon - 1, -1, -1):
-            Q = expected_next(mdp, V)
-            Q += reward
-            if demos is not None and t < demos.steps:
-                x, a = demos.states[:, t], demos.actions[:, t]
-                q = np.where(forbidden[x, a], -np.inf, Q[x, a])
-            V = masked_logsumexp(Q, forbidden)
-            if demos is not None and t < demos.steps:
-                with np.errstate(invalid="ignore"):
-                    step = (q - V[x]).sum(axis=0)
-                log_lik[block] += np.where(np.isnan(step), -np.inf, step)
-        V0[:, block] = V
-    return V0, log_lik
+    forbidden = ~masks
+    log_lik = np.zeros(masks.shape[2])
+    V = np.repeat(mdp.terminal_reward[:, None], forbidden.shape[2], axis=1)
+    for t in range(mdp.horizon - 1, -1, -1):
+        Q = _expected_next(mdp, V)
+        Q += mdp.reward[:, :, None]
+        if demos is not None and t < demos.steps:
+            x, a = demos.states[:, t], demos.actions[:, t]
+            q = np.where(forbidden[x, a], -np.inf, Q[x, a])
+        V = masked_logsumexp(Q, forbidden)
+        if demos is not None and t < demos.steps:
+            with np.errstate(invalid="ignore"):
+                step = (q - V[x]).sum(axis=0)
+            log_lik += np.where(np.isnan(step), -np.inf, step)
+    return V, log_lik
 
 
 def value_ratio(mdp, base_mask, masks):
@@ -103,7 +151,7 @@ def value_ratio(mdp, base_mask, masks):
         log_f = np.zeros((mdp.n_states, forbidden.shape[2]))
         for t in range(mdp.horizon - 1, -1, -1):
             log_pi = _log_policy(Q0[t])
-            D = expected_next(mdp, log_f)
+            D = _expected_next(mdp, log_f)
             D += log_pi[:, :, None]
             log_f = masked_logsumexp(D, forbidden)
         out[:, block] = log_f
@@ -126,7 +174,6 @@ def constraint_accrual(mdp, base_mask, masks):
     """
     pi = soft_policy(mdp, check_mask(mdp, base_mask, "base_mask"))
     masks = _masks(mdp, masks)
-    P_T = mdp.transitions.T
     out = np.empty(masks.shape[2])
     for block in _blocks(mdp, masks.shape[2]):
         violates = ~masks[:, :, block]
@@ -136,8 +183,8 @@ def constraint_accrual(mdp, base_mask, masks):
             # lines 24 and 33: H(t+1) = sum_{x,a} (H + phi (D - H)) P(a|x) S(x, a, .)
             W = np.where(violates, D[:, None, None], H[:, None, :])
             W *= pi[t][:, :, None]
-            H = np.asarray(P_T @ W.reshape(-1, W.shape[2]))
-            D = np.asarray(P_T @ (D[:, None] * pi[t]).ravel())
+            H = _mdp._transpose_times(mdp, W.reshape(-1, W.shape[2]))
+            D = _mdp._transpose_times(mdp, (D[:, None] * pi[t]).ravel())
         out[block] = 1.0 - H.sum(axis=0)
     return out
 
@@ -191,7 +238,24 @@ def expected_features(mdp, features, mask=None):
     return np.einsum("txa,xan->n", state_action_visitation(mdp, mask), phi)
 
 
-def rank_candidates(mdp, demos, forbidden, base_mask=None):
+def forbidden_columns(mdp, forbidden, name="forbidden"):
+    """``(K, columns)`` for candidate forbidden sets given as a boolean (X, A, K) array or a
+    sparse (X*A, K) matrix; ``columns(block)`` returns a dense (X, A, k) boolean block."""
+    X, A = mdp.n_states, mdp.n_actions
+    if sp.issparse(forbidden):
+        if forbidden.ndim != 2 or forbidden.shape[0] != X * A:
+            raise ValueError(f"{name}: a sparse forbidden matrix must have shape (X*A, K) with X*A = {X * A}, "
+                             f"got {forbidden.shape}")
+        csc = sp.csc_matrix(forbidden, dtype=bool)
+        return csc.shape[1], lambda block: csc[:, block].toarray().reshape(X, A, -1)
+    forbidden = np.asarray(forbidden)
+    if forbidden.dtype != bool or forbidden.ndim != 3 or forbidden.shape[:2] != (X, A):
+        raise ValueError(f"{name}: must be a boolean array of shape (X, A, K) with (X, A) = {(X, A)}, "
+                         f"got dtype {forbidden.dtype} and shape {forbidden.shape}")
+    return forbidden.shape[2], lambda block: forbidden[:, :, block]
+
+
+def rank_candidates(mdp, demos, forbidden, base_mask=None, engine="auto"):
     """Score candidates that add ``forbidden`` (X, A, K) to Phi_{C0} = ``base_mask``, by Algorithm 4.
 
     Returns ``(log_f, gain)``, both (K,): ``log_f`` the mean over demonstrations of
@@ -199,14 +263,19 @@ def rank_candidates(mdp, demos, forbidden, base_mask=None):
     exact per-demonstration log-likelihood gain of C+ over C0. The two agree for
     deterministic dynamics (gain = -log_f); under stochastic dynamics the realised
     transitions add a correction. Candidates that make a demonstration infeasible
-    (also through combining with C0) get log_f = nan and gain = -inf.
+    (also through combining with C0) get log_f = nan and gain = -inf. ``forbidden`` may
+    also be a sparse (X*A, K) matrix; ``engine`` as in :func:`log_partition`.
     """
+    check_demonstrations(mdp, demos)
     base = check_mask(mdp, base_mask, "base_mask")
+    if base.ndim != 2:
+        raise ValueError("base_mask: must be one (X, A) mask")
+    n, columns = forbidden_columns(mdp, forbidden)
     starts = demos.states[:, 0]
-    V0, ll0 = _batched_backup(mdp, base[:, :, None], demos)
+    V0, ll0 = backup_columns(mdp, lambda block: base[:, :, None], 1, demos, engine)
     if not np.isfinite(ll0[0]):
         raise ValueError("base_mask: the baseline constraints make a demonstration infeasible")
-    V, ll = _batched_backup(mdp, base[:, :, None] & ~forbidden, demos)
+    V, ll = backup_columns(mdp, lambda block: base[:, :, None] & ~columns(block), n, demos, engine)
     feasible = np.isfinite(ll)
     with np.errstate(invalid="ignore"):
         log_f = np.where(feasible, (V[starts] - V0[starts]).mean(axis=0), np.nan)

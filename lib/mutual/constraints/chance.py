@@ -8,6 +8,7 @@ mask Phi_C(a, x) of eq. (3.2), the input of every backup in :mod:`mutual.constra
 """
 
 import numpy as np
+import scipy.sparse as sp
 
 from .demonstrations import check_demonstrations
 
@@ -22,20 +23,41 @@ def _nonzeros(mdp):
     return r, c, P[r, c]
 
 
-def chance_forbidden(mdp, states, psi):
-    """For K state chance constraints (x_bar_k, psi_k): the (X, A, K) boolean array
-    of actions they forbid, [S(x, a, x_bar_k) > psi_k] (eq. 3.1)."""
-    states = np.atleast_1d(np.asarray(states))
-    psi = np.asarray(psi, dtype=float)
-    if psi.ndim > 1 or psi.size not in (1, states.size):
-        raise ValueError(f"psi: needs one threshold or one per state ({states.size}), got shape {psi.shape}")
-    psi = np.broadcast_to(psi.ravel(), states.shape)
-    if states.ndim != 1 or (states.size and (not np.issubdtype(states.dtype, np.integer)
-                                             or states.min() < 0 or states.max() >= mdp.n_states)):
-        raise ValueError(f"states: must be a 1-D array of state indices in 0..{mdp.n_states - 1}")
+def index_array(values, name, size):
+    """``values`` as a 1-D int64 array of indices in 0..size-1, refusing non-integers (2.7),
+    booleans and out-of-range entries with a ValueError naming ``name``."""
+    arr = np.atleast_1d(np.asarray(values))
+    if arr.size == 0:
+        return np.empty(0, dtype=np.int64)
+    if arr.ndim != 1 or arr.dtype == bool or not (np.issubdtype(arr.dtype, np.integer) or (
+            np.issubdtype(arr.dtype, np.floating) and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)))):
+        raise ValueError(f"{name}: must be a 1-D list of integer indices, got {values!r}")
+    arr = arr.astype(np.int64)
+    if arr.min() < 0 or arr.max() >= size:
+        raise ValueError(f"{name}: indices must lie in 0..{size - 1}, got {int(arr.min())}..{int(arr.max())}")
+    return arr
+
+
+def _thresholds(psi, n):
+    if isinstance(psi, (bool, np.bool_)) or (isinstance(psi, (str, bytes))):
+        raise ValueError(f"psi: risk thresholds must be numbers in [0, 1], got {psi!r}")
+    try:
+        psi = np.asarray(psi, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"psi: risk thresholds must be numbers in [0, 1], got {psi!r}") from None
+    if psi.ndim > 1 or psi.size not in (1, n):
+        raise ValueError(f"psi: needs one threshold or one per state ({n}), got shape {psi.shape}")
     if np.any(np.isnan(psi)) or np.any(psi < 0) or np.any(psi > 1):
         raise ValueError("psi: risk thresholds must lie in [0, 1]")
-    forbidden = np.zeros((mdp.n_states * mdp.n_actions, states.size), dtype=bool)
+    return np.broadcast_to(psi.ravel(), (n,))
+
+
+def chance_forbidden(mdp, states, psi, sparse=False):
+    """For K state chance constraints (x_bar_k, psi_k): the actions they forbid,
+    [S(x, a, x_bar_k) > psi_k] (eq. 3.1), as an (X, A, K) boolean array or, with
+    ``sparse``, a boolean CSC matrix of shape (X*A, K)."""
+    states = index_array(states, "states", mdp.n_states)
+    psi = _thresholds(psi, states.size)
     row, col, val = _nonzeros(mdp)
     # join each non-zero S(x, a, x') with every constraint k on x' (a state may carry several)
     order = np.argsort(states, kind="stable")
@@ -44,17 +66,20 @@ def chance_forbidden(mdp, states, psi):
     entry = np.repeat(np.arange(col.size), count)
     k = order[np.repeat(lo, count) + np.arange(entry.size) - np.repeat(np.cumsum(count) - count, count)]
     hit = val[entry] > psi[k]
+    shape = (mdp.n_states * mdp.n_actions, states.size)
+    if sparse:
+        return sp.csc_matrix((np.ones(int(hit.sum()), dtype=bool), (row[entry[hit]], k[hit])), shape=shape)
+    forbidden = np.zeros(shape, dtype=bool)
     forbidden[row[entry[hit]], k[hit]] = True
     return forbidden.reshape(mdp.n_states, mdp.n_actions, states.size)
 
 
 def constraint_mask(mdp, states=(), psi=0.0, actions=()):
     """The allowed-action mask Phi_C (X, A) of eq. (3.2): state chance constraints
-    (``states`` with thresholds ``psi``) together with forbidden ``actions``."""
-    actions = np.asarray(actions, dtype=int)
-    if actions.size and (actions.min() < 0 or actions.max() >= mdp.n_actions):
-        raise ValueError(f"actions: indices must lie in 0..{mdp.n_actions - 1}")
-    mask = ~chance_forbidden(mdp, np.asarray(states, dtype=int), psi).any(axis=2)
+    (``states`` with thresholds ``psi``, one or one per state) together with forbidden
+    ``actions``. Indices must be integers (2.7 is refused, not truncated)."""
+    actions = index_array(actions, "actions", mdp.n_actions)
+    mask = ~chance_forbidden(mdp, states, psi).any(axis=2)
     mask[:, actions] = False
     return mask
 
@@ -70,3 +95,16 @@ def max_likelihood_thresholds(mdp, demos):
     rows = np.unique(x * mdp.n_actions + a)
     block = mdp.transitions[rows]
     return np.asarray(block.max(axis=0).toarray() if mdp.is_sparse else block.max(axis=0)).ravel()
+
+
+def psi_star_by_loop(S, states, actions):
+    """Eq. (3.3) written out as the thesis states it, for checking: for every state x,
+    max over demonstrations xi and steps t of S(x_t, a_t, x), by plain Python loops over a
+    dense S (X, A, X) and the demonstrations' ``states`` (N, L+1) and ``actions`` (N, L)."""
+    S = np.asarray(S, dtype=float)
+    psi = [0.0] * S.shape[0]
+    for xs, acts in zip(np.asarray(states).tolist(), np.asarray(actions).tolist()):
+        for t, a in enumerate(acts):
+            for x in range(S.shape[0]):
+                psi[x] = max(psi[x], float(S[xs[t], a, x]))
+    return np.array(psi)

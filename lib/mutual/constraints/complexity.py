@@ -15,7 +15,7 @@ import numpy as np
 
 from . import mdp as mdp_module
 from .chance import chance_forbidden
-from .backup import log_partition, value_ratio
+from .backup import constraint_accrual, log_partition, value_ratio
 from .gridworld import gridworld
 
 
@@ -34,7 +34,8 @@ def best_time(fn, repeats=3):
 @contextmanager
 def counting_multiply_adds():
     """Within the block, tally every product of S (as an (X*A, X) matrix) with a value
-    matrix that the backups (Algorithms 3 and 4, the soft backup) perform.
+    matrix that the backups (Algorithms 3 and 4, the soft backup) perform, and every product of
+    S^T with a mass matrix in the forward passes (Algorithms 1 and 2).
 
     Yields a dict: ``products`` (how many) and ``multiply_adds`` (their work: the
     entries of S a product touches -- all X^2 A of a dense S, the nnz of a sparse
@@ -42,15 +43,17 @@ def counting_multiply_adds():
     actions, O(|X||A|) per column and step, is of lower order and not counted.
     """
     tally = {"products": 0, "multiply_adds": 0}
-    product = mdp_module._times_transitions
 
-    def counted(mdp, V):
-        entries = mdp.transitions.nnz if mdp.is_sparse else mdp.transitions.size
-        tally["products"] += 1
-        tally["multiply_adds"] += int(entries) * (V.shape[1] if V.ndim == 2 else 1)
-        return product(mdp, V)
+    def counting(product):
+        def counted(mdp, V):
+            entries = mdp.transitions.nnz if mdp.is_sparse else mdp.transitions.size
+            tally["products"] += 1
+            tally["multiply_adds"] += int(entries) * (V.shape[1] if V.ndim == 2 else 1)
+            return product(mdp, V)
+        return counted
 
-    with mock.patch.object(mdp_module, "_times_transitions", counted):
+    with mock.patch.object(mdp_module, "_times_transitions", counting(mdp_module._times_transitions)), \
+            mock.patch.object(mdp_module, "_transpose_times", counting(mdp_module._transpose_times)):
         yield tally
 
 
@@ -70,21 +73,26 @@ def all_single_candidates(mdp):
     return np.concatenate([~chance_forbidden(mdp, np.arange(X), 0.0), actions], axis=2)
 
 
-def gridworld_ranking(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4):
+def gridworld_ranking(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4, engine="numpy",
+                      loiter="goal"):
     """A call that ranks the first ``n_candidates`` (default all X + A) single candidates
-    on a ``side`` x ``side`` gridworld by Algorithm 4 (``algorithm=4``) or 3."""
-    if algorithm not in (3, 4):
-        raise ValueError(f"algorithm: must be 3 or 4, got {algorithm!r}")
-    g = gridworld(side, side, (0, 0), (side - 1, 0), slip=slip, horizon=horizon, sparse=sparse)
+    on a ``side`` x ``side`` gridworld by Algorithm 4 (``algorithm=4``, on ``engine``) or 3. The
+    multiply-add counts of :func:`counting_multiply_adds` watch the numpy engine's products."""
+    if algorithm not in (2, 3, 4):
+        raise ValueError(f"algorithm: must be 2, 3 or 4, got {algorithm!r}")
+    g = gridworld(side, side, (0, 0), (side - 1, 0), slip=slip, horizon=horizon, sparse=sparse, loiter=loiter)
     masks = all_single_candidates(g.mdp)[:, :, :n_candidates]
     if algorithm == 4:
-        return lambda: log_partition(g.mdp, masks)
+        return lambda: log_partition(g.mdp, masks, engine=engine)
     full = np.ones(masks.shape[:2], dtype=bool)
+    if algorithm == 2:
+        return lambda: constraint_accrual(g.mdp, full, masks)
     return lambda: value_ratio(g.mdp, full, masks)
 
 
 def gridworld_ranking_work(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4):
-    """Multiply-adds (:func:`counting_multiply_adds`) of one :func:`gridworld_ranking` run."""
+    """Multiply-adds (:func:`counting_multiply_adds`) of one :func:`gridworld_ranking` run
+    (Algorithm 2, 3 or 4 on the numpy engine)."""
     run = gridworld_ranking(side, n_candidates, sparse, slip, horizon, algorithm)
     with counting_multiply_adds() as tally:
         run()

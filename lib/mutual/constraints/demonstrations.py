@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from .mdp import soft_policy
+from .mdp import MDP, check_mask, soft_policy
 
 
 @dataclass(frozen=True, eq=False)
@@ -26,10 +26,17 @@ class Demonstrations:
         s, a = np.asarray(self.states), np.asarray(self.actions)
         if s.ndim != 2 or a.ndim != 2 or s.shape[0] != a.shape[0] or s.shape[1] != a.shape[1] + 1 or a.shape[1] < 1:
             raise ValueError(f"states/actions: shapes {s.shape} and {a.shape} should be (N, L+1) and (N, L), L >= 1")
+        if s.shape[0] < 1:
+            raise ValueError("states/actions: need at least one demonstration")
         if not (np.issubdtype(s.dtype, np.integer) and np.issubdtype(a.dtype, np.integer)):
             raise ValueError("states/actions: must be integer arrays")
         object.__setattr__(self, "states", s.astype(np.int64))
         object.__setattr__(self, "actions", a.astype(np.int64))
+
+    def __repr__(self):
+        starts = np.unique(self.states[:, 0])
+        return (f"Demonstrations(N = {self.n}, L = {self.steps} steps, "
+                f"{starts.size} start state{'s' if starts.size > 1 else ''})")
 
     @property
     def n(self):
@@ -44,27 +51,42 @@ class Demonstrations:
         return self.states[:, :-1].ravel(), self.actions.ravel()
 
 
-def check_demonstrations(mdp, demos):
-    """Raise ValueError if ``demos`` has unknown states/actions, is longer than the
-    horizon, or takes a transition that has zero probability under S."""
+def _first_problem(mdp, demos):
+    """``(message, demo, t, column)`` of the first way ``demos`` does not fit ``mdp``, or None."""
     s, a = demos.states, demos.actions
     if s.min() < 0 or s.max() >= mdp.n_states:
-        bad = np.argwhere((s < 0) | (s >= mdp.n_states))[0]
-        raise ValueError(f"demonstrations: unknown state {s[tuple(bad)]} (demo {bad[0]}, t {bad[1]}); "
-                         f"states are 0..{mdp.n_states - 1}")
+        d, t = np.argwhere((s < 0) | (s >= mdp.n_states))[0]
+        return f"unknown state {s[d, t]}; states are 0..{mdp.n_states - 1}", d, t, "state"
     if a.min() < 0 or a.max() >= mdp.n_actions:
-        bad = np.argwhere((a < 0) | (a >= mdp.n_actions))[0]
-        raise ValueError(f"demonstrations: unknown action {a[tuple(bad)]} (demo {bad[0]}, t {bad[1]}); "
-                         f"actions are 0..{mdp.n_actions - 1}")
+        d, t = np.argwhere((a < 0) | (a >= mdp.n_actions))[0]
+        return f"unknown action {a[d, t]}; actions are 0..{mdp.n_actions - 1}", d, t, "action"
     if demos.steps > mdp.horizon:
-        raise ValueError(f"demonstrations: {demos.steps} steps exceed the horizon T = {mdp.horizon}")
+        return f"{demos.steps} steps exceed the horizon T = {mdp.horizon}", 0, mdp.horizon + 1, "t"
+    offered = mdp.allowed[s[:, :-1], a]
+    if not offered.all():
+        d, t = np.argwhere(~offered)[0]
+        return f"action {a[d, t]} is not available in state {s[d, t]} (MDP.allowed)", d, t, "action"
     rows = (s[:, :-1] * mdp.n_actions + a).ravel()
     prob = np.asarray(mdp.transitions[rows, s[:, 1:].ravel()]).ravel()
     if np.any(prob <= 0):
-        i = int(np.flatnonzero(prob <= 0)[0])
-        d, t = divmod(i, demos.steps)
-        raise ValueError(f"demonstrations: demo {d} moves from state {s[d, t]} with action {a[d, t]} to state "
-                         f"{s[d, t + 1]} at t {t}, a transition with zero probability under S")
+        d, t = divmod(int(np.flatnonzero(prob <= 0)[0]), demos.steps)
+        return (f"moving from state {s[d, t]} with action {a[d, t]} to state {s[d, t + 1]} is a transition "
+                "with zero probability under S"), d, t + 1, "state"
+    return None
+
+
+def check_demonstrations(mdp, demos):
+    """Raise ValueError if ``demos`` has unknown states/actions, is longer than the
+    horizon, takes an action its state does not offer, or takes a transition that has
+    zero probability under S."""
+    if not isinstance(mdp, MDP):
+        raise TypeError(f"mdp: must be an MDP, got {type(mdp).__name__}")
+    if not isinstance(demos, Demonstrations):
+        raise TypeError(f"demos: must be Demonstrations, got {type(demos).__name__}")
+    problem = _first_problem(mdp, demos)
+    if problem:
+        message, d, t, _ = problem
+        raise ValueError(f"demonstrations: demo {d}, t {t}: {message}")
     return demos
 
 
@@ -73,12 +95,14 @@ def sample_demonstrations(mdp, n, mask=None, rng=None):
 
     Starts are drawn from ``mdp.initial``; ``rng`` is a seed or numpy Generator.
     """
-    if not isinstance(n, (int, np.integer)) or n < 1:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n: must be a positive integer, got {n!r}")
+    if not isinstance(mdp, MDP):
+        raise TypeError(f"mdp: must be an MDP, got {type(mdp).__name__}")
     rng = np.random.default_rng(rng)
-    pi = soft_policy(mdp, mask)
+    pi = soft_policy(mdp, check_mask(mdp, mask))
     if np.any(pi[0].sum(axis=1)[mdp.initial > 0] == 0):
-        raise ValueError("mask: some initial state has no allowed action")
+        raise ValueError("mask: no trajectory from some initial state satisfies the constraints (V = -inf)")
     T, X, A = mdp.horizon, mdp.n_states, mdp.n_actions
     states = np.empty((n, T + 1), dtype=np.int64)
     actions = np.empty((n, T), dtype=np.int64)
@@ -102,6 +126,7 @@ def demonstration_log_likelihood(mdp, demos, mask=None):
 
     The dynamics' factor S(x_t, a_t, x_{t+1}) does not depend on the constraints and is left out.
     """
+    check_demonstrations(mdp, demos)
     pi = soft_policy(mdp, mask)
     t = np.broadcast_to(np.arange(demos.steps), demos.actions.shape)
     with np.errstate(divide="ignore"):
@@ -113,6 +138,8 @@ DEMONSTRATION_COLUMNS = ("demo", "t", "state", "action")
 
 def write_demonstrations(path, demos):
     """Write ``demos`` atomically in the CSV format of :func:`load_demonstrations`."""
+    if not isinstance(demos, Demonstrations):
+        raise TypeError(f"demos: must be Demonstrations, got {type(demos).__name__}")
     n, L = demos.n, demos.steps
     actions = np.concatenate([demos.actions, np.full((n, 1), -1)], axis=1).ravel()
     df = pd.DataFrame({"demo": np.repeat(np.arange(n), L + 1), "t": np.tile(np.arange(L + 1), n),
@@ -123,6 +150,21 @@ def write_demonstrations(path, demos):
     return path
 
 
+def _integers(df, column, path, allow_empty=False):
+    """Column ``column`` as float values (nan where empty), refusing text and fractions with
+    a ValueError naming the file, the line and the column."""
+    raw = df[column].str.strip()
+    values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
+    bad = (np.isnan(values) & (raw.fillna("") != "")) | (np.isfinite(values) & (np.mod(values, 1) != 0))
+    bad |= np.isinf(values)
+    if not allow_empty:
+        bad |= raw.fillna("") == ""
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"{path}, line {i + 2}, column {column!r}: {df[column].iloc[i]!r} is not an integer")
+    return values
+
+
 def load_demonstrations(path, mdp):
     """Read demonstrations from CSV and check them against ``mdp``.
 
@@ -130,31 +172,55 @@ def load_demonstrations(path, mdp):
     ``demo`` numbers the demonstrations 0..N-1; ``t`` runs 0..L in each (every
     demonstration has the same L <= T steps); ``state`` (0..X-1) is x_t;
     ``action`` (0..A-1) is a_t, taken in x_t, and is empty on each demonstration's
-    last row (t = L, the state reached). For a :class:`mutual.constraints.mdp.Gridworld`,
+    last row (t = L, the state reached). For a :class:`mutual.constraints.gridworld.Gridworld`,
     state = col + width * row (row 0 at the bottom) and actions follow
-    ``GRID_ACTIONS``. Unknown states or actions, and transitions with zero
-    probability under S, raise a ValueError naming the row.
+    ``GRID_ACTIONS``. Every problem -- an empty file, a missing column, text or a fraction
+    where an integer belongs, an action on a last row, an unknown state or action, an
+    action the state does not offer, a transition with zero probability under S -- raises
+    a ValueError naming the file, the line (1 = the header) and the column.
     """
-    df = pd.read_csv(path)
+    try:
+        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_values=[""])
+    except pd.errors.EmptyDataError:
+        raise ValueError(f"{path}: the file is empty; expected a header {','.join(DEMONSTRATION_COLUMNS)} "
+                         "and one row per time step") from None
     missing = [c for c in DEMONSTRATION_COLUMNS if c not in df.columns]
     if missing:
-        raise ValueError(f"{path}: missing columns {missing}; expected {list(DEMONSTRATION_COLUMNS)}")
-    for col in ("demo", "t", "state"):
-        if df[col].isna().any() or not np.all(np.mod(df[col], 1) == 0):
-            raise ValueError(f"{path}: column {col!r} must hold integers on every row")
-    df = df.sort_values(["demo", "t"], kind="stable")
-    demo_ids = np.unique(df["demo"])
-    if not np.array_equal(demo_ids, np.arange(len(demo_ids))):
-        raise ValueError(f"{path}: demo ids must be 0..N-1")
-    lengths = df.groupby("demo").size().to_numpy()
-    if len(set(lengths)) != 1 or lengths[0] < 2:
-        raise ValueError(f"{path}: every demo must have the same number (>= 2) of rows")
-    n, L = len(demo_ids), int(lengths[0]) - 1
-    t = df["t"].to_numpy(dtype=np.int64).reshape(n, L + 1)
-    if not np.all(t == np.arange(L + 1)):
-        raise ValueError(f"{path}: t must run 0..{L} without gaps in every demo")
-    action = df["action"].to_numpy(dtype=float).reshape(n, L + 1)
-    if np.isnan(action[:, :-1]).any() or np.any(np.mod(action[:, :-1], 1) != 0):
-        raise ValueError(f"{path}: action must be an integer on every row but each demo's last")
-    states = df["state"].to_numpy(dtype=np.int64).reshape(n, L + 1)
-    return check_demonstrations(mdp, Demonstrations(states, action[:, :-1].astype(np.int64)))
+        raise ValueError(f"{path}, line 1: missing columns {missing}; expected {list(DEMONSTRATION_COLUMNS)}")
+    if df.empty:
+        raise ValueError(f"{path}: no rows after the header; expected one row per time step")
+    values = {c: _integers(df, c, path, allow_empty=(c == "action")) for c in DEMONSTRATION_COLUMNS}
+    line = np.arange(len(df)) + 2
+    order = np.lexsort((values["t"], values["demo"]))
+    demo, t, state, action, line = (a[order] for a in (values["demo"], values["t"], values["state"],
+                                                        values["action"], line))
+    ids, counts = np.unique(demo, return_counts=True)
+    if not np.array_equal(ids, np.arange(ids.size)):
+        odd = ids[int(np.flatnonzero(ids != np.arange(ids.size))[0])]
+        raise ValueError(f"{path}, line {int(line[demo == odd][0])}, column 'demo': demo ids must run 0..N-1 "
+                         f"without gaps; found {int(odd)}")
+    if len(set(counts)) != 1 or counts[0] < 2:
+        d = int(np.flatnonzero(counts != counts[0])[0]) if len(set(counts)) != 1 else 0
+        raise ValueError(f"{path}, line {int(line[demo == d][0])}, column 'demo': every demo must have the same "
+                         f"number (>= 2) of rows; demo {d} has {int(counts[d])}, demo 0 has {int(counts[0])}")
+    n, L = ids.size, int(counts[0]) - 1
+    shape = (n, L + 1)
+    t, state, action, line = t.reshape(shape), state.reshape(shape), action.reshape(shape), line.reshape(shape)
+    wrong = t != np.arange(L + 1)
+    if wrong.any():
+        d, k = np.argwhere(wrong)[0]
+        raise ValueError(f"{path}, line {line[d, k]}, column 't': t must run 0..{L} without gaps in every demo")
+    if np.isnan(action[:, :-1]).any():
+        d, k = np.argwhere(np.isnan(action[:, :-1]))[0]
+        raise ValueError(f"{path}, line {line[d, k]}, column 'action': empty; an action is needed on every row "
+                         "but each demo's last")
+    if not np.isnan(action[:, -1]).all():
+        d = int(np.flatnonzero(~np.isnan(action[:, -1]))[0])
+        raise ValueError(f"{path}, line {line[d, -1]}, column 'action': {int(action[d, -1])} on the last row of "
+                         f"demo {d} (t = {L}); the state reached takes no action, leave it empty")
+    demos = Demonstrations(state.astype(np.int64), action[:, :-1].astype(np.int64))
+    problem = _first_problem(mdp, demos)
+    if problem:
+        message, d, k, column = problem
+        raise ValueError(f"{path}, line {line[d, min(k, L)]}, column {column!r}: {message}")
+    return demos

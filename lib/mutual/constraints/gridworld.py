@@ -1,7 +1,8 @@
 """The gridworld of Section 3.3: eight compass moves that slip to one of the other seven
-directions, a loiter action, a running reward of minus the distance moved, a terminal reward that
-pays for reaching the goal."""
+directions, a loitering terminal action for once the goal is reached, a running reward of minus
+the distance moved, a terminal reward that pays for reaching the goal."""
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +12,8 @@ from .mdp import MDP
 
 GRID_ACTIONS = ("E", "NE", "N", "NW", "W", "SW", "S", "SE", "loiter")
 GRID_DELTAS = np.array([(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1), (0, 0)])
+LOITER = GRID_ACTIONS.index("loiter")
+LOITER_RULES = ("goal", "anywhere")
 
 
 @dataclass(frozen=True, eq=False)
@@ -23,6 +26,11 @@ class Gridworld:
     goal: tuple
     slip: float
     mdp: MDP
+    loiter: str = "goal"
+
+    def __repr__(self):
+        return (f"Gridworld({self.width} x {self.height}, start {self.start}, goal {self.goal}, slip {self.slip:g}, "
+                f"T = {self.mdp.horizon}, loiter at {'the goal only' if self.loiter == 'goal' else 'any cell'})")
 
     def state(self, col, row):
         return col + self.width * row
@@ -38,32 +46,54 @@ class Gridworld:
         return f"action {GRID_ACTIONS[index]}"
 
 
-def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=50.0, sparse=False):
+def _integer(name, v, low):
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
+        raise ValueError(f"{name}: must be an integer >= {low}, got {v!r}")
+    return int(v)
+
+
+def _cell(name, value, width, height):
+    try:
+        c, r = value
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: must be a (col, row) pair of integers, got {value!r}") from None
+    if any(isinstance(v, bool) or not isinstance(v, (int, np.integer)) for v in (c, r)):
+        raise ValueError(f"{name}: must be a (col, row) pair of integers, got {value!r}")
+    if not (0 <= c < width and 0 <= r < height):
+        raise ValueError(f"{name}: {(c, r)} is off the {width} x {height} grid")
+    return int(c), int(r)
+
+
+def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=50.0, sparse=False, loiter="goal"):
     """The thesis's gridworld (Section 3.3).
 
     Actions: the eight compass moves ``GRID_ACTIONS[:8]`` and ``loiter``. A move
     goes in its commanded direction with probability 1 - ``slip`` and otherwise
     in one of the other seven compass directions (``slip / 7`` each); loitering
-    stays put surely. Off-grid rule: a commanded move off the grid leaves the
-    agent in place, and a slip never leaves the grid -- the slip probability is
-    spread evenly over the other directions that stay on it (so a slip never
-    lands the agent back where it stood). Reward: r(x, a) = -(length of the commanded move): 1 for
-    orthogonal, sqrt(2) for diagonal moves, 0 for loitering, so the agent
-    minimises the distance it travels and loiters free of charge once at the
-    goal. Terminal reward: 0 at the goal and -``miss_penalty`` elsewhere, so the
-    agent must reach the goal within ``horizon`` steps (default 2 max(W, H), room
-    for a detour around a constraint).
+    stays put surely. ``loiter="goal"`` (the thesis: "a loitering terminal action for
+    once the goal was reached") offers loiter at the goal only -- elsewhere it is
+    unavailable (``MDP.allowed``) and the agent must move every step;
+    ``loiter="anywhere"`` offers it in every cell. Off-grid rule: a commanded move
+    off the grid leaves the agent in place, and a slip never leaves the grid -- the
+    slip probability is spread evenly over the other directions that stay on it (so a
+    slip never lands the agent back where it stood). Reward: r(x, a) = -(length of the
+    commanded move): 1 for orthogonal, sqrt(2) for diagonal moves, 0 for loitering, so
+    the agent minimises the distance it travels. Terminal reward: 0 at the goal and
+    -``miss_penalty`` (>= 0) elsewhere, so the agent must reach the goal within
+    ``horizon`` steps (default 2 max(W, H), room for a detour around a constraint).
     The agent starts at ``start``; positions are (col, row), row 0 at the bottom.
     """
-    for name, v in (("width", width), ("height", height)):
-        if not isinstance(v, (int, np.integer)) or v < 2:
-            raise ValueError(f"{name}: must be an integer >= 2, got {v!r}")
-    for name, (c, r) in (("start", start), ("goal", goal)):
-        if not (0 <= c < width and 0 <= r < height):
-            raise ValueError(f"{name}: {(c, r)} is off the {width} x {height} grid")
-    if not 0 <= slip <= 1:
-        raise ValueError(f"slip: must lie in [0, 1], got {slip!r}")
-    horizon = 2 * max(width, height) if horizon is None else horizon
+    width, height = _integer("width", width, 2), _integer("height", height, 2)
+    start, goal = _cell("start", start, width, height), _cell("goal", goal, width, height)
+    if isinstance(slip, bool) or not isinstance(slip, numbers.Real) or not 0 <= slip <= 1:
+        raise ValueError(f"slip: must be a number in [0, 1], got {slip!r}")
+    if isinstance(miss_penalty, bool) or not isinstance(miss_penalty, numbers.Real) or not (
+            np.isfinite(miss_penalty) and miss_penalty >= 0):
+        raise ValueError(f"miss_penalty: must be a finite number >= 0 (a penalty for missing the goal), "
+                         f"got {miss_penalty!r}")
+    if loiter not in LOITER_RULES:
+        raise ValueError(f"loiter: must be one of {LOITER_RULES}, got {loiter!r}")
+    horizon = 2 * max(width, height) if horizon is None else _integer("horizon", horizon, 1)
     X, A = width * height, len(GRID_ACTIONS)
     col, row = np.arange(X) % width, np.arange(X) // width
     nc, nr = col[:, None] + GRID_DELTAS[None, :8, 0], row[:, None] + GRID_DELTAS[None, :8, 1]
@@ -72,7 +102,7 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
     commanded = np.eye(8, dtype=bool)[None]                                           # (1, a, d)
     slips = on_grid[:, None, :] & ~commanded                                          # (X, a, d)
     prob = np.where(commanded, 1.0 - slip, slip * slips / slips.sum(axis=2, keepdims=True))
-    rows = np.concatenate([np.repeat(np.arange(X)[:, None] * A + np.arange(8), 8), np.arange(X) * A + 8])
+    rows = np.concatenate([np.repeat(np.arange(X)[:, None] * A + np.arange(8), 8), np.arange(X) * A + LOITER])
     cols = np.concatenate([np.broadcast_to(landing[:, None, :], (X, 8, 8)).ravel(), np.arange(X)])
     vals = np.concatenate([prob.ravel(), np.ones(X)])
     keep = vals > 0
@@ -83,6 +113,10 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
     w[g] = 0.0
     p0 = np.zeros(X)
     p0[start[0] + width * start[1]] = 1.0
+    allowed = np.ones((X, A), dtype=bool)
+    if loiter == "goal":
+        allowed[:, LOITER] = False
+        allowed[g, LOITER] = True
     S = P if sparse else P.toarray().reshape(X, A, X)
-    return Gridworld(width, height, tuple(start), tuple(goal), float(slip),
-                     MDP(S, reward, horizon, terminal_reward=w, initial=p0))
+    return Gridworld(width, height, start, goal, float(slip),
+                     MDP(S, reward, horizon, terminal_reward=w, initial=p0, allowed=allowed), loiter)

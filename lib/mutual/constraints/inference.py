@@ -1,85 +1,46 @@
 """Greedy maximum-likelihood constraint inference (Section 2.4, Chapter 3's chance thresholds):
-the candidate constraints a demonstration set allows, and the greedy iterative procedure that
-adds the best-ranked one per round (:func:`greedy_inference`); :func:`horizon_sensitivity` shows
-its first round as the (unstated) horizon T varies."""
+the greedy iterative procedure that adds the best-ranked candidate per round
+(:func:`greedy_inference`, on one task or on pooled tasks), its history
+(:class:`InferenceResult`), and :func:`horizon_sensitivity`, its first round as the (unstated)
+horizon T varies. The candidates themselves are built in :mod:`.candidates`."""
 
-from dataclasses import dataclass
+import numbers
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
-from .chance import chance_forbidden, max_likelihood_thresholds
-from .backup import rank_candidates
-from .demonstrations import check_demonstrations, sample_demonstrations
+from .backup import ENGINES, rank_candidates
+from .bounds import gain_bounds
+from .feasibility import infeasible_candidates
+from .candidates import Candidates, as_tasks, constraint_candidates
+from .demonstrations import sample_demonstrations
 from .mdp import check_mask
 
-
-@dataclass(frozen=True, eq=False)
-class Candidates:
-    """Single-constraint hypotheses C+ (Section 2.4.1).
-
-    ``kind[k]`` is "state" or "action", ``index[k]`` the state or action, ``psi[k]``
-    the state's chance threshold (nan for actions), ``forbidden`` (X, A, K) the actions
-    each forbids, ``feasible[k]`` whether it keeps every demonstration possible.
-    """
-
-    kind: np.ndarray
-    index: np.ndarray
-    psi: np.ndarray
-    forbidden: np.ndarray
-    feasible: np.ndarray
-
-    def __len__(self):
-        return self.kind.size
-
-    def label(self, k):
-        return f"{self.kind[k]} {self.index[k]}"
-
-    def find(self, kind, index):
-        """The candidate number of the ``kind`` ("state"/"action") constraint on ``index``."""
-        hit = np.flatnonzero((self.kind == kind) & (self.index == index))
-        if hit.size != 1:
-            raise ValueError(f"kind/index: no single {kind} candidate on {index}")
-        return int(hit[0])
-
-
-def constraint_candidates(mdp, demos, states=True, actions=True, chance=True):
-    """One candidate per state (a chance constraint, eq. 3.1) and per action (forbidden everywhere).
-
-    With ``chance`` each state's threshold is the maximum-likelihood psi*(x) of
-    eq. (3.3) (Lemma 3.2.1); otherwise psi = 0, the hard state constraints of
-    Chapter 2. A candidate is infeasible -- never chosen -- if it forbids a
-    demonstrated action in its state (a demonstrated transition exceeds its
-    threshold), forbids a demonstrated action, or (psi = 0) forbids a demonstrated state.
-    """
-    check_demonstrations(mdp, demos)
-    X, A = mdp.n_states, mdp.n_actions
-    state_ids = np.arange(X) if states else np.empty(0, dtype=int)
-    action_ids = np.arange(A) if actions else np.empty(0, dtype=int)
-    psi = max_likelihood_thresholds(mdp, demos)[state_ids] if chance else np.zeros(state_ids.size)
-    forbidden_actions = np.zeros((X, A, action_ids.size), dtype=bool)
-    forbidden_actions[:, action_ids, np.arange(action_ids.size)] = True
-    forbidden = np.concatenate([chance_forbidden(mdp, state_ids, psi), forbidden_actions], axis=2)
-    x, a = demos.pairs()
-    feasible = ~forbidden[x, a].any(axis=0)
-    visited = np.zeros(X, dtype=bool)
-    visited[demos.states.ravel()] = True
-    feasible[: state_ids.size] &= ~((psi == 0) & visited[state_ids])
-    kind = np.array(["state"] * state_ids.size + ["action"] * action_ids.size)
-    return Candidates(kind, np.concatenate([state_ids, action_ids]),
-                      np.concatenate([psi, np.full(action_ids.size, np.nan)]), forbidden, feasible)
+__all__ = ["Candidates", "InferenceResult", "constraint_candidates", "greedy_inference", "horizon_sensitivity",
+           "latest_recovery", "score_candidates"]
 
 
 @dataclass(frozen=True, eq=False)
 class InferenceResult:
     """Greedy inference history: ``chosen[i]`` the candidate added in round i,
-    ``log_f[i]`` (K,) every candidate's mean log F in round i (nan: infeasible or chosen),
-    ``gain[i]`` (K,) their exact per-demonstration log-likelihood gains, ``mask`` the final Phi_C."""
+    ``log_f[i]`` (K,) every candidate's mean log F in round i (nan: infeasible, already chosen
+    or -- with pruning -- not scored because its bound could not win), ``gain[i]`` (K,) their
+    exact per-demonstration log-likelihood gains, ``mask`` the final constraint mask Phi_C
+    (constraints only; each MDP's unavailable actions are added by the backups), ``stop`` why
+    the run ended ("rounds", "min_gain" or "no feasible candidate") and ``scored[i]`` how many
+    candidates were scored exactly in round i (the last entry: the round that stopped it)."""
 
     chosen: list
     log_f: list
     gain: list
     mask: np.ndarray
+    stop: str = "rounds"
+    scored: list = field(default_factory=list)
+
+    def __repr__(self):
+        F = ", ".join(f"{v:.3g}" for v in self.F)
+        return f"InferenceResult({len(self.chosen)} constraints chosen, F = [{F}], stopped by {self.stop})"
 
     @property
     def gains(self):
@@ -101,6 +62,15 @@ class InferenceResult:
         """The round (1-based) by which every candidate in ``targets`` has been chosen, or None."""
         rounds = [self.chosen.index(k) + 1 if k in self.chosen else None for k in targets]
         return None if None in rounds else max(rounds, default=0)
+
+    def before_first_untrue(self, truth):
+        """The chosen candidates up to (not including) the first one outside ``truth``."""
+        out = []
+        for k in self.chosen:
+            if k not in truth:
+                break
+            out.append(k)
+        return out
 
     def summary(self, relevant, truth):
         """How the run went against a known ground truth (candidate numbers): the round by
@@ -130,40 +100,113 @@ def latest_recovery(rounds):
     return "not reached" if "not reached" in rounds else int(max(rounds))
 
 
-def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=None, criterion="F"):
+def score_candidates(tasks, candidates, idx, mask, engine="auto"):
+    """Mean log F and exact gain per demonstration (Algorithm 4, :func:`rank_candidates`) of the
+    candidates ``idx`` over pooled ``tasks`` [(mdp, demos), ...], weighted by demonstrations."""
+    total = sum(d.n for _, d in tasks)
+    log_f, gain = np.zeros(len(idx)), np.zeros(len(idx))
+    columns = candidates.forbidden_matrix[:, idx]
+    for m, d in tasks:
+        lf, g = rank_candidates(m, d, columns, mask, engine)
+        log_f += lf * d.n / total
+        gain += g * d.n / total
+    return log_f, gain
+
+
+def _check_inputs(tasks, candidates, rounds, min_gain, criterion, prune, engine):
+    if not isinstance(candidates, Candidates):
+        raise TypeError(f"candidates: must be Candidates (from constraint_candidates), got {type(candidates).__name__}")
+    X, A = tasks[0][0].n_states, tasks[0][0].n_actions
+    if tuple(candidates.shape) != (X, A):
+        raise ValueError(f"candidates: built for (X, A) = {tuple(candidates.shape)}, the MDP has {(X, A)}")
+    if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 0:
+        raise ValueError(f"rounds: must be a non-negative integer, got {rounds!r}")
+    if min_gain is not None and (isinstance(min_gain, bool) or not isinstance(min_gain, numbers.Real)
+                                 or not np.isfinite(min_gain)):
+        raise ValueError(f"min_gain: must be None (no stopping rule) or a finite number of nats per "
+                         f"demonstration, got {min_gain!r}")
+    if criterion not in ("F", "likelihood"):
+        raise ValueError(f"criterion: must be 'F' or 'likelihood', got {criterion!r}")
+    if not isinstance(prune, (bool, np.bool_)):
+        raise TypeError(f"prune: must be True or False, got {prune!r}")
+    if prune and criterion != "F":
+        raise ValueError("prune: the gain bound holds for the ranking by F only; use criterion='F'")
+    if engine not in ENGINES:
+        raise ValueError(f"engine: must be one of {ENGINES}, got {engine!r}")
+
+
+def _pruned_round(tasks, candidates, idx, mask, floor, engine, first=32):
+    """Score only the candidates that keep the demonstrations feasible (:mod:`.feasibility`) and
+    whose bound (:mod:`.bounds`) could beat the best exact score: the ``first`` best-bounded ones,
+    then every other one whose bound reaches the best score so far."""
+    total = sum(d.n for _, d in tasks)
+    columns = candidates.forbidden_matrix[:, idx]
+    dead = np.zeros(idx.size, dtype=bool)
+    for m, d in tasks:
+        dead |= infeasible_candidates(m, d, mask, columns)
+    bound = np.full(idx.size, -np.inf)
+    bound[~dead] = sum(gain_bounds(m, d, mask, columns[:, ~dead]) * d.n / total for m, d in tasks)
+    order = np.argsort(-bound, kind="stable")
+    log_f, gain = np.full(idx.size, np.nan), np.full(idx.size, -np.inf)
+    head = order[:first][bound[order[:first]] >= floor]
+    log_f[head], gain[head] = score_candidates(tasks, candidates, idx[head], mask, engine)
+    best = np.nanmax(np.where(np.isfinite(gain[head]), -log_f[head], -np.inf), initial=-np.inf)
+    rest = order[first:][bound[order[first:]] >= max(best, floor)]
+    if rest.size:
+        log_f[rest], gain[rest] = score_candidates(tasks, candidates, idx[rest], mask, engine)
+    return log_f, gain, head.size + rest.size, dead
+
+
+def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=None, criterion="F", prune=False,
+                     engine="auto"):
     """Greedy iterative constraint inference (Section 2.4, after Scobee and Sastry).
 
     Each round scores every feasible, not yet chosen candidate by Algorithm 4 and adds
     the best: the smallest F (``criterion="F"``, the thesis's ranking, eq. 2.25) or the
-    largest exact log-likelihood gain (``criterion="likelihood"``). Stopping rule: after
-    ``rounds`` rounds, or -- when ``min_gain`` is given -- before adding a constraint
-    whose gain -log F falls below ``min_gain`` nats per demonstration (F > exp(-min_gain)):
-    once only untrue constraints remain, F retracts towards 1.
+    largest exact log-likelihood gain (``criterion="likelihood"``).
+
+    **Stopping rule**: after ``rounds`` rounds; or -- when ``min_gain`` (a finite number of
+    nats per demonstration) is given -- as soon as the best candidate's gain -log F falls
+    below ``min_gain`` (F > exp(-min_gain)): it is not added and inference ends
+    (``result.stop == "min_gain"``). Once only untrue constraints remain, F retracts towards 1.
+    Inference also ends when no feasible candidate is left.
+
+    ``mdp`` and ``demos`` may be equally long lists: demonstrations of several tasks on the
+    same dynamics, pooled (each candidate's log F and gain are averaged over all
+    demonstrations). ``prune=True`` (ranking by F only) scores exactly only the candidates
+    whose upper bound on -log F (:mod:`.bounds`) could win the round: the same choices, far
+    fewer backups on large worlds; unscored candidates get log F = nan in the history.
+    ``engine`` as in :func:`mutual.constraints.backup.log_partition`.
     """
-    check_demonstrations(mdp, demos)
-    if not isinstance(rounds, (int, np.integer)) or rounds < 0:
-        raise ValueError(f"rounds: must be a non-negative integer, got {rounds!r}")
-    if criterion not in ("F", "likelihood"):
-        raise ValueError(f"criterion: must be 'F' or 'likelihood', got {criterion!r}")
-    mask = check_mask(mdp, base_mask, "base_mask").copy()
+    tasks = as_tasks(mdp, demos)
+    _check_inputs(tasks, candidates, rounds, min_gain, criterion, prune, engine)
+    mask = check_mask(tasks[0][0], base_mask, "base_mask") | ~tasks[0][0].allowed
     available = candidates.feasible.copy()
-    chosen, history, gains = [], [], []
+    chosen, history, gains, scored, stop = [], [], [], [], "rounds"
+    floor = -np.inf if min_gain is None else min_gain
     for _ in range(rounds):
         idx = np.flatnonzero(available)
         log_f, gain = np.full(len(candidates), np.nan), np.full(len(candidates), -np.inf)
-        log_f[idx], gain[idx] = rank_candidates(mdp, demos, candidates.forbidden[:, :, idx], mask)
+        if prune:
+            log_f[idx], gain[idx], n_scored, dead = _pruned_round(tasks, candidates, idx, mask, floor, engine)
+            available[idx[dead]] = False     # infeasible now, so under every tighter mask too
+        else:
+            (log_f[idx], gain[idx]), n_scored = score_candidates(tasks, candidates, idx, mask, engine), idx.size
+        scored.append(int(n_scored))
         if not np.isfinite(gain).any():
+            stop = "min_gain" if prune and n_scored == 0 and idx.size else "no feasible candidate"
             break
         score = np.where(np.isfinite(gain), -log_f if criterion == "F" else gain, -np.inf)
         best = int(np.argmax(score))
         if min_gain is not None and -log_f[best] < min_gain:
+            stop = "min_gain"
             break
         chosen.append(best)
         history.append(log_f)
         gains.append(gain)
-        mask &= ~candidates.forbidden[:, :, best]
+        mask &= ~candidates.forbidden_matrix[:, best].toarray().reshape(mask.shape)
         available[best] = False
-    return InferenceResult(chosen, history, gains, mask)
+    return InferenceResult(chosen, history, gains, mask, stop, scored)
 
 
 def horizon_sensitivity(grid_at, horizons, truth, n_demos, seed, watch_state):

@@ -4,11 +4,20 @@ soft, maximum-causal-entropy Bellman backup (eqs. 2.16-2.21), in log space.
 An :class:`MDP` holds the transition tensor S(x, a, x') -- dense ``(X, A, X)``
 or a ``scipy.sparse`` matrix of shape ``(X*A, X)`` whose row ``x*A + a`` is
 S(x, a, .) -- the running reward r(x, a), the terminal reward w(x), the horizon
-T and the initial state distribution. A trajectory collects r(x_t, a_t) for
-t = 0..T-1 and w(x_T) (eq. 2.3), so V_0(x) = log Z(x) (eq. 2.24).
+T, the initial state distribution and which actions each state offers. A
+trajectory collects r(x_t, a_t) for t = 0..T-1 and w(x_T) (eq. 2.3), so
+V_0(x) = log Z(x) (eq. 2.24).
 
 Constraints enter as an allowed-action mask Phi_C(x, a) (eq. 2.12 or 3.2):
 boolean ``(X, A)``, or ``(X, A, K)`` for K constraint sets backed up at once.
+
+**Actions a state does not offer** (e.g. the gridworld's loiter action, offered
+at the goal only, Section 3.3) are the structural mask ``MDP.allowed`` (X, A):
+every backup, policy, sampler and candidate ANDs it into Phi_C (:func:`check_mask`),
+so an unavailable action is forbidden under every constraint set, gets Q = -inf and
+probability 0, and no demonstration may take it. Its row S(x, a, .) must still be a
+probability distribution (it is never used). Every state must offer an action.
+
 Forbidden actions get Q = -inf; a state with no allowed action gets V = -inf,
 and -inf values never turn into NaN (0 * -inf is avoided explicitly).
 """
@@ -19,16 +28,19 @@ import numpy as np
 import scipy.sparse as sp
 
 _ATOL = 1e-9
+MAX_VALUE = 1e100  # |r| T + |w| must stay below this: values far inside the float64 range
 
 
 @dataclass(frozen=True, eq=False)
 class MDP:
     """A validated finite-horizon MDP (Section 2.2.1).
 
-    ``transitions``: S(x, a, x') as a dense ``(X, A, X)`` array or a sparse
-    ``(X*A, X)`` matrix; ``reward``: r(x, a) as ``(X, A)`` (or ``(X,)``, the same
+    ``transitions``: S(x, a, x') as a dense ``(X, A, X)`` array or an ``(X*A, X)``
+    matrix (dense or sparse; row ``x*A + a``); ``reward``: r(x, a) as ``(X, A)`` (or ``(X,)``, the same
     for every action); ``terminal_reward``: w(x) as ``(X,)`` (default 0);
-    ``horizon``: T >= 1; ``initial``: p_0 as ``(X,)`` (default uniform).
+    ``horizon``: T >= 1; ``initial``: p_0 as ``(X,)`` (default uniform);
+    ``allowed``: the actions each state offers, boolean ``(X, A)`` (default all).
+    Rewards are refused when T max|r| + max|w| exceeds ``MAX_VALUE`` (1e100).
     """
 
     transitions: object
@@ -36,33 +48,53 @@ class MDP:
     horizon: int
     terminal_reward: np.ndarray = None
     initial: np.ndarray = None
+    allowed: np.ndarray = None
 
     def __post_init__(self):
         P, n_states, n_actions = _check_transitions(self.transitions)
-        reward = np.asarray(self.reward, dtype=float)
+        reward = _float_array(self.reward, "reward")
         if reward.shape == (n_states,):
             reward = np.repeat(reward[:, None], n_actions, axis=1)
         if reward.shape != (n_states, n_actions):
             raise ValueError(f"reward: shape {reward.shape} should be (X, A) = {(n_states, n_actions)} or (X,)")
         if not np.all(np.isfinite(reward)):
             raise ValueError("reward: must be finite everywhere")
-        w = np.zeros(n_states) if self.terminal_reward is None else np.asarray(self.terminal_reward, dtype=float)
+        w = np.zeros(n_states) if self.terminal_reward is None else _float_array(self.terminal_reward,
+                                                                                  "terminal_reward")
         if w.shape != (n_states,):
             raise ValueError(f"terminal_reward: shape {w.shape} should be (X,) = ({n_states},)")
         if not np.all(np.isfinite(w)):
             raise ValueError("terminal_reward: must be finite everywhere")
         if isinstance(self.horizon, bool) or not isinstance(self.horizon, (int, np.integer)) or self.horizon < 1:
             raise ValueError(f"horizon: must be an integer >= 1, got {self.horizon!r}")
-        p0 = np.full(n_states, 1.0 / n_states) if self.initial is None else np.asarray(self.initial, dtype=float)
+        bound = int(self.horizon) * float(np.abs(reward).max()) + float(np.abs(w).max())
+        if bound > MAX_VALUE:
+            raise ValueError(f"reward: T max|r| + max|w| = {bound:.3g} exceeds {MAX_VALUE:.0e}; rescale the "
+                             "rewards (soft values this large lose every digit of the policy)")
+        p0 = np.full(n_states, 1.0 / n_states) if self.initial is None else _float_array(self.initial, "initial")
         if p0.shape != (n_states,):
             raise ValueError(f"initial: shape {p0.shape} should be (X,) = ({n_states},)")
-        if np.any(p0 < 0) or not np.isclose(p0.sum(), 1.0, atol=_ATOL):
+        if not np.all(np.isfinite(p0)) or np.any(p0 < 0) or not np.isclose(p0.sum(), 1.0, atol=_ATOL):
             raise ValueError("initial: must be a probability distribution (non-negative, summing to 1)")
+        allowed = np.ones((n_states, n_actions), dtype=bool) if self.allowed is None else np.asarray(self.allowed)
+        if allowed.dtype != bool or allowed.shape != (n_states, n_actions):
+            raise ValueError(f"allowed: must be a boolean array of shape (X, A) = {(n_states, n_actions)}, "
+                             f"got dtype {allowed.dtype} and shape {allowed.shape}")
+        if not allowed.any(axis=1).all():
+            raise ValueError(f"allowed: state {int(np.flatnonzero(~allowed.any(axis=1))[0])} offers no action")
+        allowed = allowed.copy()
+        allowed.setflags(write=False)
         for name, value in (("transitions", P), ("reward", reward), ("terminal_reward", w),
-                            ("horizon", int(self.horizon)), ("initial", p0)):
+                            ("horizon", int(self.horizon)), ("initial", p0), ("allowed", allowed)):
             object.__setattr__(self, name, value)
         object.__setattr__(self, "n_states", n_states)
         object.__setattr__(self, "n_actions", n_actions)
+
+    def __repr__(self):
+        kind = f"sparse S, nnz {self.transitions.nnz}" if self.is_sparse else "dense S"
+        off = int((~self.allowed).sum())
+        return (f"MDP(|X| = {self.n_states}, |A| = {self.n_actions}, T = {self.horizon}, {kind}"
+                + (f", {off} state-action pairs unavailable" if off else "") + ")")
 
     @property
     def is_sparse(self):
@@ -74,19 +106,28 @@ class MDP:
         return P.reshape(self.n_states, self.n_actions, self.n_states)
 
 
+def _float_array(value, name):
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: must be an array of numbers, got {type(value).__name__}") from None
+
+
 def _check_transitions(S):
     """Return S as a ``(X*A, X)`` float array or CSR matrix, checking it is stochastic."""
     if sp.issparse(S):
-        if S.ndim != 2 or S.shape[1] == 0 or S.shape[0] % S.shape[1]:
+        if S.ndim != 2 or S.shape[1] == 0 or S.shape[0] == 0 or S.shape[0] % S.shape[1]:
             raise ValueError(f"transitions: a sparse S must have shape (X*A, X), got {S.shape}")
         P = sp.csr_matrix(S, dtype=float)
         P.sum_duplicates()
         values, row_sums = P.data, np.asarray(P.sum(axis=1)).ravel()
         n_states = S.shape[1]
     else:
-        S = np.asarray(S, dtype=float)
+        S = _float_array(S, "transitions")
+        if S.ndim == 2 and S.shape[1] and S.shape[0] and S.shape[0] % S.shape[1] == 0:
+            S = S.reshape(S.shape[1], -1, S.shape[1])          # the (X*A, X) layout of MDP.transitions
         if S.ndim != 3 or S.shape[0] != S.shape[2] or S.shape[0] == 0 or S.shape[1] == 0:
-            raise ValueError(f"transitions: a dense S must have shape (X, A, X), got {S.shape}")
+            raise ValueError(f"transitions: a dense S must have shape (X, A, X) or (X*A, X), got {S.shape}")
         n_states = S.shape[0]
         P = np.ascontiguousarray(S.reshape(-1, n_states))
         values, row_sums = P, P.sum(axis=1)
@@ -125,6 +166,12 @@ def _times_transitions(mdp, V):
     return mdp.transitions @ V
 
 
+def _transpose_times(mdp, W):
+    """S^T (an (X, X*A) matrix) times W: the forward pass of Algorithms 1-2 (state-action mass
+    to next-state mass)."""
+    return np.asarray(mdp.transitions.T @ W)
+
+
 def masked_logsumexp(Q, forbidden, axis=1):
     """log sum_a exp(Q) over the allowed entries; overwrites ``Q`` (eq. 2.21).
 
@@ -142,23 +189,24 @@ def masked_logsumexp(Q, forbidden, axis=1):
 
 
 def check_mask(mdp, mask, name="mask"):
-    """Validate an allowed-action mask Phi_C: boolean (X, A) or (X, A, K); None means all allowed."""
+    """Validate an allowed-action mask Phi_C -- boolean (X, A) or (X, A, K); None means no
+    constraint -- and AND it with the actions each state offers (``mdp.allowed``)."""
     if mask is None:
-        return np.ones((mdp.n_states, mdp.n_actions), dtype=bool)
+        return mdp.allowed.copy()
     mask = np.asarray(mask)
     if mask.dtype != bool:
         raise ValueError(f"{name}: must be a boolean array, got dtype {mask.dtype}")
     if mask.ndim not in (2, 3) or mask.shape[:2] != (mdp.n_states, mdp.n_actions):
         raise ValueError(f"{name}: shape {mask.shape} should be (X, A) or (X, A, K) with (X, A) = "
                          f"{(mdp.n_states, mdp.n_actions)}")
-    return mask
+    return mask & (mdp.allowed if mask.ndim == 2 else mdp.allowed[:, :, None])
 
 
 def soft_bellman_backup(mdp, mask=None):
     """The constrained soft Bellman backup, eqs. (2.19)-(2.21), for one constraint set.
 
     Returns ``(V, Q)`` with V of shape (T+1, X) (V[T] = w, V[0] = log Z) and
-    Q of shape (T, X, A) (Q = -inf for forbidden actions).
+    Q of shape (T, X, A) (Q = -inf for forbidden and unavailable actions).
     """
     mask = check_mask(mdp, mask)
     if mask.ndim != 2:
@@ -177,9 +225,14 @@ def soft_bellman_backup(mdp, mask=None):
 def soft_policy(mdp, mask=None):
     """The constrained Boltzmann policy P_C(a | x, t) = Phi_C exp(Q - V), eq. (2.19): (T, X, A).
 
-    A state with no allowed action (V = -inf) gets an all-zero row.
+    Computed as a softmax relative to each row's largest Q, so every row of a state
+    with an allowed action sums to 1 up to rounding (1e-12) for any rewards the
+    :class:`MDP` accepts; a state with no allowed action (V = -inf) gets an all-zero row.
     """
-    V, Q = soft_bellman_backup(mdp, mask)
+    _, Q = soft_bellman_backup(mdp, mask)
+    top = Q.max(axis=2, keepdims=True)
+    alive = np.isfinite(top)
     with np.errstate(invalid="ignore"):
-        pi = np.exp(Q - V[:-1, :, None])
-    return np.nan_to_num(pi, nan=0.0)
+        pi = np.exp(np.where(alive, Q - np.where(alive, top, 0.0), -np.inf))
+    total = pi.sum(axis=2, keepdims=True)
+    return np.divide(pi, total, out=np.zeros_like(pi), where=total > 0)

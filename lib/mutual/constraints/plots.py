@@ -1,49 +1,68 @@
-"""Drawing gridworld constraint inference (Figures 3.1-3.3): values on the grid's
-states and on the compass of actions, with constraints marked by a red X."""
+"""Drawing gridworld constraint inference (Figures 3.1-3.3): values on the grid's states and on
+the compass of actions, constraints marked by a red X. Figures are built as
+``matplotlib.figure.Figure`` (no pyplot state), so the notebooks, the Explore functions and the
+animation share them."""
 
-import matplotlib.pyplot as plt
+import matplotlib
 import numpy as np
+from matplotlib.animation import FuncAnimation
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
 from ..style import PALETTE
 from .gridworld import GRID_ACTIONS, GRID_DELTAS
 
 _COMPASS = {a: (1 + dy, 1 + dx) for a, (dx, dy) in zip(range(len(GRID_ACTIONS)), GRID_DELTAS)}  # (row, col) in 3x3
+_SHORT = {"loiter": "Lo"}
 
 
-def _cross(ax, col, row, **kw):
-    ax.plot(col, row, marker="x", color=PALETTE["vermillion"], markersize=kw.pop("size", 10), mew=2.5,
-            linestyle="none", **kw)
+def _cmap(cmap):
+    return matplotlib.colormaps[cmap].with_extremes(bad="0.85")
 
 
-def plot_states(ax, grid, values, vmin=0.0, vmax=1.0, cmap="viridis", crosses=(), title=None):
-    """Shade each state of ``grid`` by ``values`` (nan: grey), mark ``crosses`` (state ids) with a red X."""
+def _cross(ax, col, row, size=10):
+    ax.plot(col, row, marker="x", color=PALETTE["vermillion"], markersize=size, mew=2.5, linestyle="none")
+
+
+def plot_states(ax, grid, values, vmin=0.0, vmax=1.0, cmap="viridis", crosses=(), title=None, labels=True):
+    """Shade each state of ``grid`` by ``values`` (nan: grey), mark ``crosses`` (state ids) with a
+    red X, S and G at the start and goal; axes in grid columns and rows (row 0 at the bottom)."""
     image = np.ma.masked_invalid(np.asarray(values, dtype=float).reshape(grid.height, grid.width))
-    colormap = plt.get_cmap(cmap).with_extremes(bad="0.85")
-    im = ax.imshow(image, origin="lower", cmap=colormap, vmin=vmin, vmax=vmax)
+    im = ax.imshow(image, origin="lower", cmap=_cmap(cmap), vmin=vmin, vmax=vmax)
     for name, (c, r) in (("S", grid.start), ("G", grid.goal)):
         ax.text(c, r, name, ha="center", va="center", color="white", fontsize=8, fontweight="bold")
     for s in crosses:
         _cross(ax, *grid.coords(s))
-    ax.set_xticks([])
-    ax.set_yticks([])
+    step = 2 if max(grid.width, grid.height) > 6 else 1
+    ax.set_xticks(range(0, grid.width, step))
+    ax.set_yticks(range(0, grid.height, step))
+    ax.tick_params(labelsize=6, length=2)
+    if labels:
+        ax.set_xlabel("column", fontsize=7)
+        ax.set_ylabel("row", fontsize=7)
     if title:
         ax.set_title(title, fontsize=8)
     return im
 
 
 def plot_actions(ax, values, vmin=0.0, vmax=1.0, cmap="viridis", crosses=(), title=None):
-    """Shade the eight compass moves and loiter (centre) by ``values`` (nan: grey); mark ``crosses``."""
+    """Shade the eight compass moves and loiter (centre, "Lo") by ``values`` (nan: grey), each cell
+    labelled with its action in a colour that reads on its shade; mark ``crosses`` with a red X."""
     image = np.full((3, 3), np.nan)
     for a, v in enumerate(values):
         image[_COMPASS[a]] = v
-    colormap = plt.get_cmap(cmap).with_extremes(bad="0.85")
+    colormap = _cmap(cmap)
     im = ax.imshow(np.ma.masked_invalid(image), origin="lower", cmap=colormap, vmin=vmin, vmax=vmax)
     for a, name in enumerate(GRID_ACTIONS):
         r, c = _COMPASS[a]
-        ax.text(c, r - 0.32, "L" if name == "loiter" else name, ha="center", va="center", fontsize=6, color="white")
+        v = image[r, c]
+        shade = colormap((v - vmin) / (vmax - vmin)) if np.isfinite(v) else (0.85, 0.85, 0.85, 1)
+        ink = "black" if 0.299 * shade[0] + 0.587 * shade[1] + 0.114 * shade[2] > 0.5 else "white"
+        ax.text(c, r + 0.28, _SHORT.get(name, name), ha="center", va="center", fontsize=7, color=ink,
+                fontweight="bold")
     for a in crosses:
         r, c = _COMPASS[a]
-        _cross(ax, c, r, size=8)
+        _cross(ax, c, r - 0.1, size=8)
     ax.set_xticks([])
     ax.set_yticks([])
     if title:
@@ -51,35 +70,66 @@ def plot_actions(ax, values, vmin=0.0, vmax=1.0, cmap="viridis", crosses=(), tit
     return im
 
 
-def inference_panels(grid, candidates, result, rounds, truth_states=(), truth_actions=()):
-    """One column per round in ``rounds``: states (top) and actions (bottom) shaded by F,
-    earlier choices marked with a red X and the round's choice outlined. Returns the figure."""
-    fig, axes = plt.subplots(2, len(rounds), figsize=(2.1 * len(rounds), 3.4),
-                             gridspec_kw={"height_ratios": [3, 1.3]}, squeeze=False)
-    states, actions = candidates.kind == "state", candidates.kind == "action"
-    for j, i in enumerate(rounds):
-        F = np.exp(result.log_f[i])
-        before = result.chosen[:i]
-        chosen = result.chosen[i]
-        done_states = [candidates.index[k] for k in before if states[k]]
-        done_actions = [candidates.index[k] for k in before if actions[k]]
-        title = f"round {i + 1}: {candidate_name(grid, candidates, chosen)}\nF = {F[chosen]:.2f}"
-        im = plot_states(axes[0, j], grid, F[states], crosses=done_states, title=title)
-        plot_actions(axes[1, j], F[actions], crosses=done_actions)
-        target_ax, pos = ((axes[0, j], grid.coords(candidates.index[chosen])) if states[chosen] else
-                          (axes[1, j], _COMPASS[candidates.index[chosen]][::-1]))
-        target_ax.add_patch(plt.Rectangle((pos[0] - 0.5, pos[1] - 0.5), 1, 1, fill=False,
-                                          edgecolor=PALETTE["orange"], linewidth=2))
-        for s in truth_states:
-            c, r = grid.coords(s)
-            axes[0, j].plot(c, r, marker="o", mfc="none", mec="white", markersize=12, mew=1)
-        for a in truth_actions:
-            r, c = _COMPASS[a]
-            axes[1, j].plot(c, r, marker="o", mfc="none", mec="white", markersize=10, mew=1)
-    fig.colorbar(im, ax=axes[0, :].tolist(), shrink=0.8, label="F (grey: infeasible or chosen)")
-    return fig
-
-
 def candidate_name(grid, candidates, k):
     """'state (col, row)' or 'action NE' for candidate ``k`` on ``grid``."""
     return grid.label(candidates.kind[k], candidates.index[k])
+
+
+def draw_round(ax_states, ax_actions, grid, candidates, result, i, truth_states=(), truth_actions=()):
+    """Round ``i`` of greedy inference on two axes: states and actions shaded by F, earlier
+    choices marked with a red X, the round's choice outlined in orange, the ground truth circled."""
+    states, actions = candidates.kind == "state", candidates.kind == "action"
+    F = np.exp(result.log_f[i])
+    before, chosen = result.chosen[:i], result.chosen[i]
+    title = f"round {i + 1}: {candidate_name(grid, candidates, chosen)}\nF = {F[chosen]:.2f}"
+    im = plot_states(ax_states, grid, F[states], crosses=[candidates.index[k] for k in before if states[k]],
+                     title=title)
+    plot_actions(ax_actions, F[actions], crosses=[candidates.index[k] for k in before if actions[k]])
+    target, pos = ((ax_states, grid.coords(candidates.index[chosen])) if states[chosen] else
+                   (ax_actions, _COMPASS[candidates.index[chosen]][::-1]))
+    target.add_patch(Rectangle((pos[0] - 0.5, pos[1] - 0.5), 1, 1, fill=False, edgecolor=PALETTE["orange"],
+                               linewidth=2))
+    for s in truth_states:
+        c, r = grid.coords(s)
+        ax_states.plot(c, r, marker="o", mfc="none", mec="white", markersize=12, mew=1)
+    for a in truth_actions:
+        r, c = _COMPASS[a]
+        ax_actions.plot(c, r, marker="o", mfc="none", mec="white", markersize=10, mew=1)
+    return im
+
+
+def inference_panels(grid, candidates, result, rounds, truth_states=(), truth_actions=(), title=None):
+    """One column per round in ``rounds``: states (top) and actions (bottom) shaded by F
+    (:func:`draw_round`). Returns a ``Figure``."""
+    rounds = list(rounds)
+    fig = Figure(figsize=(2.2 * max(len(rounds), 1) + 0.8, 4.0), layout="constrained")
+    axes = fig.subplots(2, max(len(rounds), 1), gridspec_kw={"height_ratios": [3, 1.3]}, squeeze=False)
+    im = None
+    for j, i in enumerate(rounds):
+        im = draw_round(axes[0, j], axes[1, j], grid, candidates, result, i, truth_states, truth_actions)
+        if j:
+            axes[0, j].set_ylabel("")
+    if im is not None:
+        fig.colorbar(im, ax=axes[0, :].tolist(), shrink=0.8, label="F = Z$_{C+}$/Z$_{C0}$ (grey: infeasible or chosen)")
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return fig
+
+
+def inference_animation(grid, candidates, result, truth_states=(), truth_actions=(), hold=2,
+                        title="greedy inference, round by round (simulated demonstrations)"):
+    """The rounds of Figure 3.2 as a ``FuncAnimation`` (each round shown for ``hold`` frames)."""
+    fig = Figure(figsize=(4.2, 4.4), layout="constrained")
+    ax_s, ax_a = fig.subplots(2, 1, gridspec_kw={"height_ratios": [3, 1.2]})
+    fig.suptitle(title, fontsize=8)
+    frames = [i for i in range(len(result.chosen)) for _ in range(hold)]
+    im = draw_round(ax_s, ax_a, grid, candidates, result, 0, truth_states, truth_actions)
+    fig.colorbar(im, ax=[ax_s], shrink=0.8, label="F")
+
+    def show(i):
+        ax_s.clear()
+        ax_a.clear()
+        draw_round(ax_s, ax_a, grid, candidates, result, i, truth_states, truth_actions)
+        return []
+
+    return FuncAnimation(fig, show, frames=frames, blit=False)
