@@ -1,0 +1,197 @@
+"""``mutual study``: the statistics of chapter 5 on any repeated-measures table.
+
+``mutual study anova DATA.csv --dv COL --within COL --subject COL [--aggregate mean]`` runs the
+one-way repeated-measures ANOVA of section 5.3.1 (:func:`mutual.study.rm_anova`) with the
+Greenhouse-Geisser sphericity correction, all-pairs Tukey HSD with the repeated-measures error
+term (:func:`mutual.study.tukey_rm`) and paired t-tests with Holm's correction
+(:func:`mutual.study.paired_t_holm`; both in :func:`mutual.study.pairwise_comparisons`), on whatever
+level names the ``--within`` column holds.
+"""
+
+import importlib
+import re
+
+from . import common
+
+#: Further ``mutual study`` subcommands: names of modules of ``mutual.cli`` that define
+#: ``register(study_subparsers)``. The power analysis is wired with ``EXTENSIONS = ("power",)``.
+EXTENSIONS = ()
+
+DESCRIPTION = """\
+One-way repeated-measures ANOVA of --dv over the levels of --within, one row per --subject and
+level (or several, averaged with --aggregate mean). Reports F, its degrees of freedom and p, the
+Greenhouse-Geisser epsilon and corrected p (sphericity), Tukey HSD for every pair of levels with
+the repeated-measures error term, and paired t-tests with Holm's correction.
+
+DATA.csv is any CSV table with a header; the study's tidy format (data/README.md) has one row per
+participant x trial x measure, so select a measure with --where measure=trips and average a
+participant's trials with --aggregate mean. Takes well under a second.
+
+writes to --out:  anova_<name>.csv (the test), pairwise_<name>.csv (Tukey and Holm),
+                  cells_<name>.csv (the subject x level table analysed),
+                  means_<name>.png (level means with SE bars and Tukey brackets)
+"""
+
+EXAMPLE = """\
+example:
+  mutual study anova data/examples/study.csv --dv value --within treatment \\
+      --subject participant --where measure=false_positives --aggregate mean
+"""
+
+
+def register(subparsers):
+    """Add ``mutual study`` and its subcommands (``anova``, then ``EXTENSIONS``)."""
+    import argparse
+    parser = subparsers.add_parser("study", help="repeated-measures statistics of a user study (chapter 5)",
+                                   description="Statistics of a repeated-measures user study (chapter 5).")
+    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
+    anova = commands.add_parser("anova", help="repeated-measures ANOVA, Greenhouse-Geisser, Tukey and Holm",
+                                description=DESCRIPTION, epilog=EXAMPLE,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    anova.add_argument("data", metavar="DATA.csv", help="a CSV table with a header row")
+    anova.add_argument("--dv", required=True, metavar="COL",
+                       help="the numeric column to analyse; in a tidy trial table (columns measure, value) "
+                            "also a measure name, e.g. --dv false_positives")
+    anova.add_argument("--within", required=True, metavar="COL",
+                       help="the column naming each row's level (treatment/condition); any names")
+    anova.add_argument("--subject", required=True, metavar="COL", help="the column naming each row's subject")
+    anova.add_argument("--aggregate", choices=["mean"], default=None,
+                       help="average several rows per subject and level (default: refuse them)")
+    anova.add_argument("--where", action="append", default=[], metavar="COL=VALUE",
+                       help="keep only rows whose COL equals VALUE (repeatable), e.g. measure=trips")
+    anova.add_argument("--levels", metavar="A,B,...",
+                       help="the levels to analyse and their order (default: every level, sorted)")
+    common.add_output_options(anova)
+    anova.set_defaults(handler=run_anova, prog=anova.prog)
+    for name in EXTENSIONS:
+        importlib.import_module(f"{__package__}.{name}").register(commands)
+    return parser
+
+
+def _filters(where):
+    pairs = []
+    for item in where:
+        column, sep, value = item.partition("=")
+        if not sep or not column:
+            raise common.InputError(f"--where {item!r}: expected COL=VALUE, e.g. measure=trips")
+        pairs.append((column, value))
+    return pairs
+
+
+def _select(frame, args, path):
+    """The rows and columns to analyse, with the file, column and line named on bad input."""
+    filters = _filters(args.where)
+    if args.dv not in frame.columns and {"measure", "value"} <= set(frame.columns) \
+            and (frame["measure"].astype(str) == args.dv).any():
+        # a tidy trial table: --dv names a measure, analysed in the column 'value'
+        frame = frame[frame["measure"].astype(str) == args.dv].rename(columns={"value": args.dv})
+    common.require_columns(frame, [args.dv, args.within, args.subject] + [c for c, _ in filters], path)
+    for column, value in filters:
+        keep = frame[column].astype(str) == value
+        if not keep.any():
+            seen = sorted(frame[column].astype(str).unique().tolist())
+            raise common.InputError(f"{path}: no row has {column} = {value!r} (column {column!r} holds {seen[:12]})")
+        frame = frame[keep]
+    for column in (args.subject, args.within):
+        empty = frame[column].isna() | (frame[column].astype(str).str.strip() == "")
+        if empty.any():
+            raise common.InputError(f"{path}: column {column!r}, line {int(frame.index[empty.argmax()]) + 2}: empty")
+    data = frame[[args.subject, args.within]].astype(str)
+    return data.assign(**{args.dv: common.numeric_column(frame, args.dv, path)})
+
+
+def _stem(args):
+    parts = [args.dv] + [v for _, v in _filters(args.where)]
+    return re.sub(r"[^A-Za-z0-9_.-]+", "-", "_".join(parts)).strip("-") or "dv"
+
+
+def analyse(data, dv, within, subject, aggregate=None, levels=None):
+    """The ANOVA and the pairwise table of ``data`` as one results dict (the ``--json`` object)."""
+    from ..study import pairwise_comparisons, rm_anova
+    anova = rm_anova(data, dv=dv, within=within, subject=subject, aggregate=aggregate, levels=levels)
+    pairwise = pairwise_comparisons(anova)
+    se = anova.cells.std(ddof=1) / len(anova.cells) ** 0.5
+    return anova, pairwise, {
+        "dv": dv, "within": within, "subject": subject, "aggregate": aggregate,
+        "n_subjects": anova.n_subjects, "levels": [str(level) for level in anova.levels],
+        "means": {str(k): float(v) for k, v in anova.means.items()},
+        "se": {str(k): float(v) for k, v in se.items()},
+        "F": anova.F, "df1": anova.df1, "df2": anova.df2, "p": anova.p,
+        "eps": anova.eps, "p_gg": anova.p_gg, "mse": anova.mse,
+        "pairwise": pairwise_comparisons(anova, as_records=True),
+    }
+
+
+def run_anova(args):
+    path = common.existing_file(args.data)
+    frame = common.read_csv(path)
+    data = _select(frame, args, path)
+    levels = None
+    if args.levels:
+        levels = [s.strip() for s in args.levels.split(",") if s.strip()]
+        present = sorted(set(data[args.within]))
+        absent = [level for level in levels if level not in present]
+        if absent:
+            raise common.InputError(f"{path}: --levels: no row has {args.within} = {absent[0]!r} "
+                                    f"(column {args.within!r} holds {present[:12]})")
+        data = data[data[args.within].isin(levels)]
+    with common.about(path):
+        try:
+            anova, pairwise, results = analyse(data, args.dv, args.within, args.subject, args.aggregate, levels)
+        except ValueError as err:      # speak the command line's words, not the library's
+            raise type(err)(str(err).replace("aggregate='mean'", "--aggregate mean")) from None
+    results = {"command": "study anova", "input": str(path), "where": dict(_filters(args.where)), **results}
+
+    import pandas as pd
+    stem = _stem(args)
+    table = pd.DataFrame([{k: results[k] for k in ("dv", "within", "subject", "n_subjects", "F", "df1", "df2", "p",
+                                                     "eps", "p_gg", "mse")}])
+    cells = anova.cells.reset_index()
+    outputs = {
+        "anova": common.write_csv(table, common.output_path(args, f"anova_{stem}.csv")),
+        "pairwise": common.write_csv(pairwise, common.output_path(args, f"pairwise_{stem}.csv")),
+        "cells": common.write_csv(cells, common.output_path(args, f"cells_{stem}.csv")),
+        "figure": common.save_figure(_figure(anova, pairwise, args), common.output_path(args, f"means_{stem}.png")),
+    }
+    results["outputs"] = {k: str(v) for k, v in outputs.items()}
+    common.report(args, _summary(results, args), results)
+
+
+def _figure(anova, pairwise, args):
+    common.use_agg()
+    import matplotlib.pyplot as plt
+    from ..study.plots import plot_condition_means
+    fig, ax = plt.subplots(figsize=(1.6 + 1.1 * len(anova.levels), 3.4))
+    plot_condition_means(ax, anova, pairwise.rename(columns={"p_tukey": "p"}))
+    low = float(anova.cells.to_numpy().min())
+    if low < 0:                                   # the bars start at 0; show negative values too
+        top = ax.get_ylim()[1]
+        ax.set_ylim(low - 0.05 * (top - low), top)
+    selected = ", ".join(v for _, v in _filters(args.where))
+    ax.set_xlabel(args.within)
+    ax.set_ylabel((f"{selected} ({args.dv})" if selected else args.dv)
+                  + ("\nmean per subject and level" if args.aggregate else ""))
+    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects}); grey: subjects; brackets: Tukey HSD p",
+                 fontsize=8)
+    return fig
+
+
+def _summary(r, args):
+    where = ", ".join(f"{c} = {v}" for c, v in r["where"].items())
+    lines = [f"Repeated-measures ANOVA of {r['dv']!r}" + (f" ({where})" if where else "")
+             + f" over {r['within']!r}, {r['n_subjects']} subjects"
+             + (" (cells: mean of each subject's rows)" if r["aggregate"] else ""), ""]
+    width = max(len(str(level)) for level in r["levels"]) + 2
+    lines.append(f"  {'level':<{width}}{'mean':>10}{'SE':>10}")
+    for level in r["levels"]:
+        lines.append(f"  {level:<{width}}{r['means'][level]:>10.4g}{r['se'][level]:>10.3g}")
+    lines += ["", f"  F({r['df1']}, {r['df2']}) = {r['F']:.4g}, p = {r['p']:.4g}",
+              f"  sphericity: Greenhouse-Geisser epsilon = {r['eps']:.3f}, corrected p = {r['p_gg']:.4g}",
+              f"  error term MSE = {r['mse']:.4g}", "",
+              "  pairwise: Tukey HSD (repeated-measures error term) and paired t-tests (Holm-corrected)"]
+    lines.append(f"  {'A':<{width}}{'B':<{width}}{'diff':>9}{'q':>8}{'p Tukey':>10}{'t':>8}{'p Holm':>10}")
+    for row in r["pairwise"]:
+        lines.append(f"  {row['A']:<{width}}{row['B']:<{width}}{row['diff']:>9.4g}{row['q']:>8.3g}"
+                     f"{row['p_tukey']:>10.4g}{row['t']:>8.3g}{row['p_holm']:>10.4g}")
+    lines += ["", "wrote " + ", ".join(r["outputs"].values())]
+    return "\n".join(lines)

@@ -1,0 +1,100 @@
+"""A gridworld read from a TOML file (the ``--world`` of ``mutual constraints infer``): the MDP
+of Section 3.3 that demonstrations are checked against and constraints are inferred on.
+
+The file (every key; see ``data/README.md``)::
+
+    width = 9              # columns, integer >= 2
+    height = 9             # rows, integer >= 2
+    start = [0, 0]         # [col, row] where every demonstration starts; row 0 is the bottom row
+    goal = [8, 0]          # [col, row] of the goal
+    slip = 0.1             # chance in [0, 1] that a move goes in one of the other seven directions
+    horizon = 18           # optional: steps T (integer >= 1; default 2 * max(width, height))
+    miss_penalty = 50.0    # optional: terminal reward -miss_penalty when not at the goal at T
+                           #   (>= 0, default 50); the running reward is -(length of the move)
+    loiter = "goal"        # optional: where the loiter action is allowed, "goal" (the thesis's
+                           #   terminal action, the default) or "anywhere"
+
+States are numbered ``col + width * row``; actions follow
+:data:`mutual.constraints.gridworld.GRID_ACTIONS` (E, NE, N, NW, W, SW, S, SE, loiter = 0..8).
+"""
+
+import math
+import tomllib
+from pathlib import Path
+
+from .gridworld import gridworld
+
+LOITER_RULES = ("goal", "anywhere")
+_KEYS = ("width", "height", "start", "goal", "slip", "horizon", "miss_penalty", "loiter")
+_REQUIRED = ("width", "height", "start", "goal", "slip")
+
+
+def _fail(source, key, reason):
+    raise ValueError(f"{source}: key {key!r}: {reason}")
+
+
+def _integer(d, key, source, low):
+    v = d[key]
+    if isinstance(v, bool) or not isinstance(v, int) or v < low:
+        _fail(source, key, f"must be an integer >= {low}, got {v!r}")
+    return v
+
+
+def _cell(d, key, source, width, height):
+    v = d[key]
+    if (not isinstance(v, list) or len(v) != 2
+            or not all(isinstance(c, int) and not isinstance(c, bool) for c in v)):
+        _fail(source, key, f"must be [col, row], two integers, got {v!r}")
+    col, row = v
+    if not (0 <= col < width and 0 <= row < height):
+        _fail(source, key, f"[{col}, {row}] is off the {width} x {height} grid (col 0..{width - 1}, "
+                           f"row 0..{height - 1})")
+    return (col, row)
+
+
+def _real(d, key, source, low, high=math.inf):
+    v = d[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not low <= v <= high:
+        span = f"in [{low:g}, {high:g}]" if math.isfinite(high) else f">= {low:g}"
+        _fail(source, key, f"must be a number {span}, got {v!r}")
+    return float(v)
+
+
+def world_from_mapping(mapping, source="world"):
+    """Check a world (a dict, as TOML reads it) and build its :class:`~mutual.constraints.gridworld.Gridworld`.
+
+    Raises ValueError naming ``source`` and the key for a missing, unknown or out-of-range key.
+    """
+    if not isinstance(mapping, dict):
+        raise ValueError(f"{source}: must be a table of keys, got {type(mapping).__name__}")
+    unknown = sorted(set(mapping) - set(_KEYS))
+    if unknown:
+        _fail(source, unknown[0], f"unknown key (known: {', '.join(_KEYS)})")
+    for key in _REQUIRED:
+        if key not in mapping:
+            _fail(source, key, "missing (required)")
+    width = _integer(mapping, "width", source, 2)
+    height = _integer(mapping, "height", source, 2)
+    start = _cell(mapping, "start", source, width, height)
+    goal = _cell(mapping, "goal", source, width, height)
+    slip = _real(mapping, "slip", source, 0.0, 1.0)
+    horizon = _integer(mapping, "horizon", source, 1) if "horizon" in mapping else None
+    miss_penalty = _real(mapping, "miss_penalty", source, 0.0) if "miss_penalty" in mapping else 50.0
+    loiter = mapping.get("loiter", "goal")
+    if loiter not in LOITER_RULES:
+        _fail(source, "loiter", f"must be one of {list(LOITER_RULES)}, got {loiter!r}")
+    return gridworld(width, height, start, goal, slip=slip, horizon=horizon, miss_penalty=miss_penalty,
+                     loiter=loiter)
+
+
+def load_world(path):
+    """Read a world TOML file (module docstring) and build its gridworld; errors name the file and the key."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            mapping = tomllib.load(f)
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"{path}: not valid TOML ({err})") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not valid TOML (not UTF-8 text)") from None
+    return world_from_mapping(mapping, str(path))
