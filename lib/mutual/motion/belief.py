@@ -24,8 +24,6 @@ Marginals of every prefix come from one Cholesky factor: with ``Sigma = L L'`` (
 ``log N(u_{0:t}) = sum_{j < t m} (-z_j^2 / 2 - log L_jj - log(2 pi) / 2)``.
 """
 
-from functools import lru_cache
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -92,19 +90,6 @@ def lq_gaussian(dynamics, cost, x0, N):
     return np.linalg.solve(P, -h).reshape(N, -1), P
 
 
-@lru_cache(maxsize=32)
-def _hessian_kernel(dynamics, running_cost, terminal_cost):
-    rollout = kernels(dynamics, running_cost, terminal_cost)[0]
-
-    def flat_cost(flat, shape, x0, params):
-        us = flat.reshape(shape)
-        xs = rollout(x0, us, params)
-        running = jax.vmap(running_cost, in_axes=(0, 0, None))(xs[:-1], us, params)
-        return jnp.sum(running) + terminal_cost(xs[-1], params)
-
-    return jax.jit(jax.hessian(flat_cost), static_argnums=1)
-
-
 @x64
 def laplace_gaussian(dynamics, running_cost, terminal_cost, x0, us_opt, params=None):
     """The Laplace approximation ``N(u*, [d^2 H_J(u*)]^-1)`` of eq. (6.8) around an optimum ``u*``
@@ -112,8 +97,7 @@ def laplace_gaussian(dynamics, running_cost, terminal_cost, x0, us_opt, params=N
     single-shooting cost by autodiff. Returns ``(mean (N, m), precision)``; raises ValueError when
     the Hessian is not positive definite (``u*`` is not a strict local minimum)."""
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us_opt, params)
-    H = np.asarray(_hessian_kernel(dynamics, running_cost, terminal_cost)(
-        jnp.asarray(us.ravel()), us.shape, x0, params))
+    H = np.asarray(kernels(dynamics, running_cost, terminal_cost)[4](jnp.asarray(us), x0, params))
     return us, _precision("the Hessian of the cost at us_opt", H, H.shape[0])
 
 

@@ -19,15 +19,29 @@ SPEED = 3.0  # v of eq. (7.5)
 WHEELBASE = 1.0  # L of the bicycle (m); the thesis gives none: a small robot car
 
 
+def sin_ratio(a):
+    """``sin(a) / a``, smooth to every derivative order: its Taylor series for ``|a| < 1e-2``.
+
+    ``jnp.sinc`` special-cases only ``a == 0``; at tiny nonzero ``a`` its second derivative by
+    autodiff cancels terms of size ``1/a^3`` and comes out as noise (e.g. -0.25 instead of 0.02 in a
+    DDP or Laplace Hessian for a turn rate of 1e-7), so DDP and the exact Hessian need this form.
+    """
+    small = jnp.abs(a) < 1e-2
+    safe = jnp.where(small, 1.0, a)
+    a2 = a * a
+    series = 1 - a2 / 6 * (1 - a2 / 20 * (1 - a2 / 42 * (1 - a2 / 72)))
+    return jnp.where(small, series, jnp.sin(safe) / safe)
+
+
 def dubins_step(x, u, dt, speed=SPEED):
     """Eq. (7.5) integrated exactly over ``dt`` with the turn rate ``u`` (shape (1,)) held constant.
 
-    The car turns by ``u dt`` along an arc whose chord has length ``v dt sinc(u dt / 2)``
-    and points at the mean heading ``theta + u dt / 2`` (finite and smooth as u -> 0).
+    The car turns by ``u dt`` along an arc whose chord has length ``v dt sin(u dt / 2) / (u dt / 2)``
+    (:func:`sin_ratio`) and points at the mean heading ``theta + u dt / 2`` (smooth as u -> 0).
     The same integrator as :func:`mutual.supervision.dubins.dubins_step`, written in JAX.
     """
     turn = u[0] * dt
-    chord = speed * dt * jnp.sinc(turn / (2 * jnp.pi))  # jnp.sinc(z) = sin(pi z) / (pi z)
+    chord = speed * dt * sin_ratio(turn / 2)
     mid = x[2] + turn / 2
     return jnp.stack([x[0] + chord * jnp.cos(mid), x[1] + chord * jnp.sin(mid), x[2] + turn])
 

@@ -35,6 +35,9 @@ from .problem_checks import check_batch, check_problem, x64
 from .single_shooting import solve_lbfgs_jit, solve_single_shooting  # noqa: F401 (re-exported baselines)
 
 
+SADDLE_ESCAPES = 3  # restarts from a saddle along its most negative curvature before reporting it
+
+
 class ILQRError(RuntimeError):
     """iLQR could not find a local minimum: the objective is unbounded below or the run diverged."""
 
@@ -97,6 +100,33 @@ def _order(second_order):
     raise ValueError(f"second_order must be True, False or 'auto', got {second_order!r}")
 
 
+class _SaddleError(ILQRError):
+    """A stationary point that is not a minimum (iLQR may escape it along negative curvature)."""
+
+
+def _saddle_error(message):
+    return _SaddleError(message)
+
+
+def _escape_saddle(dynamics, running_cost, terminal_cost, x0, us, params):
+    """Controls that lower the cost from the saddle ``us`` along the direction of most negative
+    curvature of the exact Hessian (both signs, backtracking from a unit step), or None."""
+    rollout, value_and_grad, _, _, hessian = kernels(dynamics, running_cost, terminal_cost)
+    H = np.asarray(hessian(us, x0, params))
+    values, vectors = np.linalg.eigh(0.5 * (H + H.T))
+    if values[0] >= 0:
+        return None
+    base = float(value_and_grad(us, x0, params)[0])
+    direction = vectors[:, 0].reshape(us.shape)
+    size = max(1.0, float(np.abs(us).max()))
+    for step in size * 0.5 ** np.arange(20):
+        for sign in (1.0, -1.0):
+            trial = us + sign * step * direction
+            if float(value_and_grad(trial, x0, params)[0]) < base:
+                return trial
+    return None
+
+
 def _outcome(xs, us, K, costs, summary, tol, max_iter):
     """An :class:`ILQRResult`, or the :class:`ILQRError` that says why there is none (not raised)."""
     end = dict(zip(SUMMARY, np.asarray(summary).tolist()))
@@ -109,7 +139,7 @@ def _outcome(xs, us, K, costs, summary, tol, max_iter):
                           costs=costs, reg=end["mu"], decrease=float(relative), magnitude=float(mag),
                           passes=int(end["passes"]))
     if status == CONVERGED:
-        return ILQRError(f"iLQR stopped at a stationary point (cost {cost:.6g}) that is not a local minimum: "
+        return _saddle_error(f"iLQR stopped at a stationary point (cost {cost:.6g}) that is not a local minimum: "
                          "the exact Hessian of the cost in the controls is not positive definite; the objective "
                          "may be unbounded below, or a symmetric start sits on a saddle (start from a perturbed "
                          "guess)")
@@ -178,6 +208,8 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     to the control curvature), when the cost falls below the start's by more than
     ``divergence_ratio`` times the start's scale (or, if ``divergence_bound`` is given, a state or
     control exceeds it), or after ``max_iter`` backward passes.
+    A stationary point that is not a minimum is left along the exact Hessian's most negative
+    curvature and the solve goes on, at most ``SADDLE_ESCAPES`` times, before it is reported.
     ``second_order``: False for Gauss-Newton iLQR, True for full DDP, ``"auto"`` (default)
     Gauss-Newton far from the minimum and DDP close to it (:mod:`mutual.motion.ilqr_core`).
     """
@@ -185,8 +217,15 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     tol = _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound)
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
     solve = kernels(dynamics, running_cost, terminal_cost)[2]
-    out = jax.device_get(solve(x0, us, params, tol, second_order=_order(second_order), max_iter=max_iter))
-    outcome = _outcome(*out, tol, max_iter)
+    for _ in range(SADDLE_ESCAPES + 1):
+        out = jax.device_get(solve(x0, us, params, tol, second_order=_order(second_order), max_iter=max_iter))
+        outcome = _outcome(*out, tol, max_iter)
+        if not isinstance(outcome, _SaddleError):
+            break
+        # a saddle (the regularised model can hide negative curvature): step off along it and go on
+        us = _escape_saddle(dynamics, running_cost, terminal_cost, x0, out[1], params)
+        if us is None:
+            break
     if isinstance(outcome, ILQRError):
         raise outcome
     return outcome

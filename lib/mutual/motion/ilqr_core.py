@@ -98,7 +98,7 @@ def _where(flag, new, state):
 
 @lru_cache(maxsize=64)
 def kernels(dynamics, running_cost, terminal_cost):
-    """Jit-compiled ``(rollout, value_and_grad, solve, solve_batch)`` for one problem's callables.
+    """Jit-compiled ``(rollout, value_and_grad, solve, solve_batch, hessian)`` for one problem's callables.
 
     ``rollout(x0, us, params)``; ``value_and_grad(us, x0, params)`` of the single-shooting cost;
     ``solve(x0, us, params, tol, second_order, max_iter)`` (see :func:`_solve`); ``solve_batch``
@@ -289,7 +289,12 @@ def kernels(dynamics, running_cost, terminal_cost):
         summary = jnp.stack([end[key].astype(float) for key in SUMMARY])
         return end["xs"], end["us"], end["G"][:, :, 1:], end["costs"], summary
 
+    def hessian(us, x0, params):
+        """The exact Hessian of the single-shooting cost in the stacked controls (N m, N m)."""
+        shape = us.shape
+        return jax.hessian(lambda flat: shooting_cost(flat.reshape(shape), x0, params))(us.ravel())
+
     batch = jax.vmap(solve, in_axes=(0, 0, 0, None, None, None))
     return (jax.jit(rollout), jax.jit(jax.value_and_grad(shooting_cost)),
             jax.jit(solve, static_argnames=("second_order", "max_iter")),
-            jax.jit(batch, static_argnums=(4, 5)))
+            jax.jit(batch, static_argnums=(4, 5)), jax.jit(hessian))
