@@ -26,9 +26,7 @@ from mutual.compendium.paths import NOTEBOOKS, results_dir  # noqa: E402
 # provenance (write_results itself refuses entries without it), and tests/test_claims_strict.py
 # skips their strictness checks. test_claims_strict fails once a listed notebook is updated, so the
 # set only shrinks.
-AWAITING_PROVENANCE = {
-    "06_evident_safety",
-}
+AWAITING_PROVENANCE = set()
 
 _PROVENANCE_SHIM = textwrap.dedent('''
     # tests/conftest.py AWAITING_PROVENANCE: fills in what write_results now requires
