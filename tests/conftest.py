@@ -4,7 +4,6 @@ so no test ever writes into the committed ``figures/`` (or the scratch folder)."
 import json
 import os
 import tempfile
-import textwrap
 from pathlib import Path
 
 import pytest
@@ -17,40 +16,17 @@ os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
 os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
-from mutual.compendium.notebooks import NotebookError, execute  # noqa: E402
-from mutual.compendium.paths import NOTEBOOKS, results_dir  # noqa: E402
-
-# SHORT-LIVED (issue 10; the coordinator empties it when the chapter branches land): chapter
-# notebooks whose write_results calls do not yet name `computed_by` and a `note` for every entry.
-# For these notebooks only, the tests run the kernel with a start-up file that fills in the missing
-# provenance (write_results itself refuses entries without it), and tests/test_claims_strict.py
-# skips their strictness checks. test_claims_strict fails once a listed notebook is updated, so the
-# set only shrinks.
-AWAITING_PROVENANCE = {
-    "06_evident_safety",
-}
-
-_PROVENANCE_SHIM = textwrap.dedent('''
-    # tests/conftest.py AWAITING_PROVENANCE: fills in what write_results now requires
-    import mutual.compendium.results as _results
-    _write_results = _results.write_results
-    _results._check_provenance = lambda notebook, cid, entry: None
-    _results.write_results = lambda notebook, claims, simulated=False: _write_results(notebook, {
-        cid: {"note": "(no note yet)", "computed_by": "(not named yet)",
-              **(entry if isinstance(entry, dict) else {"value": entry})} for cid, entry in claims.items()}, simulated)
-''')
+from mutual.compendium.notebooks import NotebookError, execute
+from mutual.compendium.paths import NOTEBOOKS, results_dir
 
 
 @pytest.fixture(scope="session")
-def executed_notebook(tmp_path_factory):
+def executed_notebook():
     """``executed_notebook(stem)`` runs ``notebooks/<stem>.ipynb`` once per session with
     ``quick=True`` in a fresh kernel and returns its results ``{claim_id: entry}``; the executed
     notebook nodes are in ``executed_notebook.nodes``. The overview runs after every chapter
     notebook, so that it renders their results."""
     outcome, nodes = {}, {}
-    shim = tmp_path_factory.mktemp("ipython")
-    (shim / "profile_default" / "startup").mkdir(parents=True)
-    (shim / "profile_default" / "startup" / "00-awaiting-provenance.py").write_text(_PROVENANCE_SHIM)
 
     def run(stem):
         if stem.startswith("00_"):
@@ -61,9 +37,8 @@ def executed_notebook(tmp_path_factory):
                     except pytest.fail.Exception:
                         pass
         if stem not in outcome:
-            env = {"IPYTHONDIR": str(shim)} if stem in AWAITING_PROVENANCE else None
             try:
-                nodes[stem] = execute(NOTEBOOKS / f"{stem}.ipynb", {"quick": True}, timeout=900, env=env)
+                nodes[stem] = execute(NOTEBOOKS / f"{stem}.ipynb", {"quick": True}, timeout=900)
                 path = results_dir() / f"{stem}.json"
                 outcome[stem] = json.loads(path.read_text())["claims"] if path.exists() else {}
             except (NotebookError, ValueError) as err:

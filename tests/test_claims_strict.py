@@ -16,8 +16,6 @@ import textwrap
 
 import nbformat
 import pytest
-from conftest import AWAITING_PROVENANCE
-
 from mutual.compendium.audit import NotebookCode, Unresolved
 from mutual.compendium.claims import VERDICTS, load_claims, rule_problems, verdict
 from mutual.compendium.paths import FIGURES, NOTEBOOKS, ROOT
@@ -29,10 +27,6 @@ BASIS = dict(zip(CLAIMS["id"], CLAIMS["basis"]))
 CHECKED = ("computed", "thesis-numbers", "undetermined")  # original-data rows show simulated values only
 CHAPTERS = sorted(p.stem for p in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb") if not p.name.startswith("00_"))
 
-
-def _awaiting(stem):
-    if stem in AWAITING_PROVENANCE:
-        pytest.skip(f"{stem} is listed in AWAITING_PROVENANCE (tests/conftest.py) until its chapter branch lands")
 
 
 def _report(stem, problems):
@@ -60,7 +54,6 @@ def test_every_value_fits_its_claims_basis_and_rule(stem, executed_notebook):
 
 @pytest.mark.parametrize("stem", CHAPTERS)
 def test_reported_values_are_computed_not_typed_in(stem):
-    _awaiting(stem)
     code = NotebookCode(NOTEBOOKS / f"{stem}.ipynb")
     _report(stem, [f"{'claims ' if r.generated else 'claim '}{r.claim} ({BASIS.get(r.claim, 'generated ids')}, code "
                    f"cell {r.cell}): the value `{r.source[:70]}` is a literal typed into the notebook (a constant, a "
@@ -70,7 +63,6 @@ def test_reported_values_are_computed_not_typed_in(stem):
 
 @pytest.mark.parametrize("stem", CHAPTERS)
 def test_results_name_the_function_the_notebook_calls(stem, executed_notebook):
-    _awaiting(stem)
     results = executed_notebook(stem)
     code = NotebookCode(NOTEBOOKS / f"{stem}.ipynb")
     problems = []
@@ -92,7 +84,6 @@ def test_results_name_the_function_the_notebook_calls(stem, executed_notebook):
 @pytest.mark.parametrize("stem", CHAPTERS)
 def test_no_value_echoes_a_setting(stem, executed_notebook):
     """A fraction that equals the thesis value and a constant the notebook set is the setting coming back."""
-    _awaiting(stem)
     results = executed_notebook(stem)
     constants = NotebookCode(NOTEBOOKS / f"{stem}.ipynb").scalar_constants()
     claims = CLAIMS.set_index("id")
@@ -107,17 +98,6 @@ def test_no_value_echoes_a_setting(stem, executed_notebook):
             problems.append(f"claim {cid}: the value {value} is the thesis value and the setting "
                             f"{', '.join(names)} = {value} the notebook typed in (an echo of an input)")
     _report(stem, problems)
-
-
-@pytest.mark.parametrize("stem", sorted(AWAITING_PROVENANCE))
-def test_awaiting_provenance_lists_only_notebooks_not_yet_updated(stem):
-    """The short-lived list only shrinks: once a notebook names computed_by and a note everywhere, remove it."""
-    path = NOTEBOOKS / f"{stem}.ipynb"
-    if not path.exists():
-        pytest.fail(f"{stem} no longer exists: remove it from AWAITING_PROVENANCE (tests/conftest.py)")
-    reported = NotebookCode(path).reported()
-    assert not all(r.computed_by is not None and r.note is not None for r in reported), \
-        f"{stem} names computed_by and a note for every claim: remove it from AWAITING_PROVENANCE (tests/conftest.py)"
 
 
 def test_readme_states_the_reports_verdict_counts():
@@ -208,8 +188,7 @@ def test_the_checker_tells_literals_from_computed_values(synthetic):
 
 
 def test_the_checker_resolves_what_the_notebook_calls(synthetic):
-    import mutual.study.data as data
-    import mutual.study.stats as stats
+    from mutual.study import data, stats
 
     assert synthetic.references(stats.rm_anova)  # through `st.` and through the `from` import
     assert synthetic.references(stats.design_from_f_dofs)

@@ -99,10 +99,13 @@ def test_bad_inputs(kwargs, match):
 
 
 def test_notebook_measures_the_corollary(executed_notebook):
-    """Corollary 6.4.2.1 is a measured time ratio now, not a value typed in."""
+    """Corollary 6.4.2.1 is a verdict on measured time ratios, not a value typed in: the result names the
+    timing function and the horizons it measured (the ratios themselves vary by machine, so only the verdict
+    is recorded and the numbers live in the notebook's table and the benchmarks)."""
     res = executed_notebook("05_legibility_lqr")
     entry = res["c6-corollary-same-complexity"]
-    assert isinstance(entry["value"], float) and entry["value"] > 0
+    assert isinstance(entry["value"], bool)
+    assert "N = " in entry["note"] and "at most twice" in entry["note"]
     assert entry["computed_by"] == "mutual.motion.timing.corollary_time_ratios"
     assert res["c6-dragan-eq11-linear"]["computed_by"] == "mutual.motion.dragan.gradient_linear_structure"
 

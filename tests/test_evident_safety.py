@@ -130,7 +130,7 @@ def test_distance_to_point_closed_form():
 
 def test_task_validation_names_the_argument():
     with pytest.raises(ValueError, match="x0"):
-        es.EvidentSafetyTask(x0=[0, 0, 0, 0], goal=[1, 1])
+        es.EvidentSafetyTask(x0=[0, 0, 0, 0, 0], goal=[1, 1])
     with pytest.raises(ValueError, match="goal"):
         es.EvidentSafetyTask(x0=[0, 0], goal=[1, 1, 1])
     with pytest.raises(ValueError, match="keep_out"):
@@ -141,9 +141,54 @@ def test_task_validation_names_the_argument():
         es.figure_scenario("9.9")
 
 
-def test_notebook_reproduces_the_chapter(executed_notebook):
+def test_bicycle_step_integrates_the_kinematic_bicycle():
+    """One RK4 step against scipy's adaptive integrator (error O(dt^5) per step)."""
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        x0 = np.r_[rng.normal(size=3), 2 + rng.random()]
+        u = np.array([0.4 * rng.normal(), rng.normal()])
+        ode = solve_ivp(lambda t, x: [x[3] * np.cos(x[2]), x[3] * np.sin(x[2]), x[3] * np.tan(u[0]) / 1.0, u[1]],
+                        (0, 0.04), x0, rtol=1e-12, atol=1e-12)
+        with jax.enable_x64(True):
+            ours = np.asarray(es.bicycle_step(x0, u, 0.04, 1.0))
+        np.testing.assert_allclose(ours, ode.y[:, -1], atol=1e-8)
+
+
+def test_figure_6_1_uses_the_bicycle():
+    task, w0, w1 = es.figure_scenario("6.1", steps=20)
+    assert task.x0.shape == (4,) and task.controls == 2
+    us = np.zeros((20, 2))
+    us[:, 1] = 0.5  # accelerate straight ahead: x = -6 + 3 t + t^2 / 4
+    xs = es.rollout(task, us)
+    assert xs[-1, 0] == pytest.approx(-6 + 3 * 4 + 0.25 * 16, rel=1e-12)
+    assert xs[-1, 3] == pytest.approx(3 + 0.5 * 4)
+
+
+def test_evidence_rules():
+    from mutual.motion import evidence
+    t = np.linspace(0, 1, 11)
+    h0 = np.c_[2 * t - 1, np.full_like(t, 0.2)]  # passes 0.2 from the hazard at the origin at t = 0.5
+    far = np.c_[2 * t - 1, 0.2 + np.minimum(t, 1 - t) * 2]  # bends away from the start
+    lead = evidence.lead_time(far, h0, [0.0, 0.0], 0.1)
+    assert lead["t_close"] == pytest.approx(0.5)
+    assert lead["t_separate"] == pytest.approx(0.1)
+    assert evidence.lead_time(h0, h0, [0.0, 0.0], 0.1)["lead"] == -np.inf
+    assert evidence.close_but_clear(0.5, 0.3) and not evidence.close_but_clear(0.7, 0.3)
+    holds, gain, ratio = evidence.obvious_avoidance(far, h0, h0 + [0, 0.01], [0.0, 1.0], 0.1)
+    assert not holds and gain < 0  # 'far' bends towards this hazard, so it is not more evident
+    holds, gain, ratio = evidence.obvious_avoidance(far, h0, h0 + [0, 0.01], [0.0, -0.5], 0.1)
+    assert ratio > 1 and holds == (gain >= 0.25 and ratio >= 1.5)
+
+
+def test_notebook_reports_every_claim_with_its_computation(executed_notebook):
     claims = executed_notebook("06_evident_safety")
-    for cid in ("c7-fig71-settings", "c7-fig71-legible-demonstrates-correction", "c7-fig72-settings",
-                "c7-ilqr-converges", "c7-fig72-h1-integral-farther", "c7-fig72-h1-only-slightly",
-                "c7-fig72-legible-obvious", "c7-ilqr-same-complexity"):
-        assert claims[cid]["value"] is True, cid
+    expected = {"c7-fig71-legible-demonstrates-correction", "c7-fig71-ilqr-equals-riccati", "c7-ilqr-converges",
+                "c7-fig72-h1-integral-farther", "c7-fig72-h1-only-slightly", "c7-fig72-legible-obvious",
+                "c7-fig72-anticipates-lead-time", "c7-mpc-anticipation-exaggeration", "c7-ilqr-same-complexity",
+                "c6-fig61-ignorant-collision", "c6-fig61-h1-avoids-but-close", "c6-fig61-legible-farther"}
+    assert expected <= set(claims)
+    for cid in expected:
+        assert claims[cid]["computed_by"].startswith("mutual.motion."), cid
+        assert claims[cid]["note"].startswith("06_evident_safety"), cid
+    assert claims["c7-fig71-ilqr-equals-riccati"]["value"] is True
+    assert claims["c7-ilqr-converges"]["value"] is True

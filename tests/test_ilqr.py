@@ -158,3 +158,117 @@ def test_bad_inputs_are_named():
         ilqr(dyn, lambda x, u, p: x, term, np.zeros(2), np.zeros((5, 1)), 0.01)
     with pytest.raises(ValueError, match="max_iter"):
         ilqr(dyn, run, term, np.zeros(2), np.zeros((5, 1)), 0.01, max_iter=0)
+
+
+# ---- scale-free tests (issue 13): the same answer for any scale of the objective and any start ------------
+
+from mutual.motion import evident_safety as es  # noqa: E402
+from mutual.motion.ilqr import ilqr_batch, iteration_flops, solve_lbfgs_jit  # noqa: E402
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e6, 1e4])
+@pytest.mark.parametrize("figure", ["7.1", "7.2"])
+def test_scaled_objectives_give_the_same_optimum(figure, scale):
+    """Multiplying the objective by a constant changes neither the optimum nor the verdict."""
+    task, w0, w1 = es.figure_scenario(figure, steps=30)
+    for name, w in es.hypothesis_set(w0, w1).items():
+        plain = es.solve(task, w)
+        scaled = es.solve(task, scale * w)
+        assert scaled.cost / scale == pytest.approx(plain.cost, rel=1e-9, abs=1e-9 * abs(plain.magnitude)), name
+        np.testing.assert_allclose(scaled.us, plain.us, atol=1e-6)
+
+
+@pytest.mark.parametrize("start", [1e8, -1e8, 1e3])
+def test_far_initial_guess_is_not_mistaken_for_a_solution(start):
+    """Issue 13: from u = 1e8 the Fig. 7.1 problem used to 'converge' after 0 iterations at cost 2e19."""
+    task, w0, w1 = es.figure_scenario("7.1", steps=30)
+    exact = es.solve(task, w1)
+    far = es.solve(task, w1, np.full((30, 2), start))
+    assert far.iterations >= 1
+    assert far.cost == pytest.approx(exact.cost, rel=1e-9)
+    np.testing.assert_allclose(far.us, exact.us, atol=1e-6)
+
+
+def test_far_initial_guess_on_the_nonlinear_problem_still_converges_to_a_minimum():
+    task, w0, w1 = es.figure_scenario("7.2", steps=30)
+    r = es.solve(task, w0, np.full((30, 1), 50.0), max_iter=500)
+    value, grad = es.cost_gradient(task, w0, r.us)
+    assert np.abs(grad).max() <= 1e-6 * r.magnitude
+    assert r.cost < es.cost(task, w0, np.full((30, 1), 50.0))
+
+
+def test_divergence_is_relative_to_the_start_not_an_absolute_bound():
+    """An unbounded objective is still reported whatever its scale; a bounded one never is."""
+    task, w0, w1 = es.figure_scenario("7.1", steps=30)
+    for scale in (1e-6, 1.0, 1e6):
+        with pytest.raises(ILQRError, match="unbounded"):
+            es.solve(task, scale * es.legible_weights(w1, w0, 0.02))
+
+
+def test_an_exactly_zero_cost_optimum_converges():
+    """No scale of its own (M = 0): the floor eps c keeps the tests meaningful."""
+    task, w0, _ = es.figure_scenario("6.1", steps=20)
+    r = es.solve(task, w0)
+    assert abs(r.cost) < 1e-20
+    np.testing.assert_allclose(r.us, 0.0, atol=1e-8)
+
+
+def test_gauss_newton_ddp_and_auto_agree_on_the_dubins_optima():
+    task, w0, w1 = es.figure_scenario("7.2", steps=30)
+    for name, w in es.hypothesis_set(w0, w1).items():
+        costs = [es.solve(task, w, second_order=order).cost for order in (False, True, "auto")]
+        assert max(costs) - min(costs) <= 1e-8 * abs(costs[0]), name
+
+
+def test_batch_equals_one_at_a_time():
+    task, w0, w1 = es.figure_scenario("7.2", steps=30)
+    alphas = [0.5, 1.0, 2.0, 0.02]
+    weights = [es.legible_weights(w1, w0, a) for a in alphas]
+    batch = es.solve_batch(task, weights)
+    for w, r, err in zip(weights, batch.results, batch.errors):
+        try:
+            single = es.solve(task, w, second_order=False)  # the batch's default (Gauss-Newton)
+        except ILQRError as e:
+            assert r is None and err
+            continue
+        assert r.cost == pytest.approx(single.cost, rel=1e-12)
+        np.testing.assert_allclose(r.us, single.us, atol=1e-10)
+    assert "problems" in repr(batch)
+
+
+def test_multistart_reports_disagreeing_runs():
+    """The legible Fig. 7.2 problem has two routes around the hazard: starts turning either way find both."""
+    task, w0, w1 = es.figure_scenario("7.2", steps=30)
+    multi = es.best_of_starts(task, es.legible_weights(w1, w0, 0.5), turn_rates=(2.0, -2.0, 0.0), second_order=("auto",))
+    best, converged = multi
+    assert converged == multi.converged >= 2
+    assert best.cost == pytest.approx(np.nanmin(multi.costs))
+    assert multi.local_minima == (len(multi.minima) > 1)
+    costs = multi.costs[np.isfinite(multi.costs)]
+    assert multi.local_minima == bool(costs.max() - costs.min() > 1e-6 * best.magnitude)
+    convex, v0, v1 = es.figure_scenario("7.1", steps=20)  # LQ: one minimum, every start agrees
+    agree = es.best_of_starts(convex, v1, turn_rates=(0.0, 1.0, -3.0), second_order=("auto", False))
+    assert agree.converged == 6 and not agree.local_minima and "agree" in repr(agree)
+
+
+def test_result_repr_is_short():
+    task, w0, w1 = es.figure_scenario("7.1", steps=10)
+    text = repr(es.solve(task, w0))
+    assert text.startswith("ILQRResult(cost=") and len(text) < 150 and "array" not in text
+
+
+def test_jitted_lbfgs_baseline_reaches_the_same_cost():
+    task, w0, w1 = es.figure_scenario("7.2", steps=30)
+    r = es.solve(task, w1)
+    dyn, run, term, x0, params = es.problem(task, w1)
+    us, cost, its = solve_lbfgs_jit(dyn, run, term, x0, task.zero_controls(), params, target=r.cost + 1e-9 * abs(r.cost))
+    assert cost <= r.cost + 1e-9 * abs(r.cost) and its > 1
+
+
+def test_legible_iteration_costs_at_most_the_sum_of_the_hypotheses():
+    """Corollary 6.4.2.1 counted by XLA: evaluating both hypotheses' costs adds far less than a second iteration."""
+    task, w0, w1 = es.figure_scenario("7.2", steps=20)
+    plain = iteration_flops(*es.problem(task, w1)[:4], task.zero_controls(), es.problem(task, w1)[4])
+    dyn, run, term, x0, p = es.literal_legible_problem(task, w0, w1, 0.5)
+    legible = iteration_flops(dyn, run, term, x0, task.zero_controls(), p)
+    assert plain < legible <= 2 * plain

@@ -10,7 +10,7 @@ import mutual
 
 PACKAGE = Path(mutual.__file__).parent
 MODULES = sorted(PACKAGE.rglob("*.py"))
-ALGORITHMS = ("constraints", "supervision", "study", "motion")
+ALGORITHMS = ("constraints", "supervision", "study", "motion", "cycle")
 MAX_LINES = 420
 
 

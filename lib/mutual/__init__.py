@@ -11,6 +11,10 @@ Robots informing humans through motion:
 
 * :mod:`mutual.motion` -- legible motion (ch. 6) and evident safety (ch. 7).
 
+The two together (Figure 8.1):
+
+* :mod:`mutual.cycle` -- the closing cycle of ch. 8 run end to end: learn, act, show.
+
 :mod:`mutual.compendium` is the machinery of this repository (paths, figures, the report); the
 algorithms never import it.
 """

@@ -15,7 +15,7 @@ from . import common
 
 #: Further ``mutual study`` subcommands: names of modules of ``mutual.cli`` that define
 #: ``register(study_subparsers)``. The power analysis is wired with ``EXTENSIONS = ("power",)``.
-EXTENSIONS = ()
+EXTENSIONS = ("power",)
 
 DESCRIPTION = """\
 One-way repeated-measures ANOVA of --dv over the levels of --within, one row per --subject and
