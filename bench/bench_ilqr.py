@@ -17,7 +17,7 @@ import numpy as np
 
 from mutual.motion import evident_safety as es
 from mutual.motion import explore
-from mutual.motion.ilqr import ILQRError, ilqr, ilqr_batch, solve_lbfgs_jit
+from mutual.motion.ilqr import ILQRError, ilqr, solve_lbfgs_jit
 from mutual.motion.legibility import single_integrator
 from mutual.motion.legibility import solve as solve_riccati
 

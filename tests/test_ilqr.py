@@ -163,7 +163,7 @@ def test_bad_inputs_are_named():
 # ---- scale-free tests (issue 13): the same answer for any scale of the objective and any start ------------
 
 from mutual.motion import evident_safety as es  # noqa: E402
-from mutual.motion.ilqr import ilqr_batch, iteration_flops, solve_lbfgs_jit  # noqa: E402
+from mutual.motion.ilqr import iteration_flops, solve_lbfgs_jit  # noqa: E402
 
 
 @pytest.mark.parametrize("scale", [1e-6, 1e6, 1e4])
@@ -228,7 +228,7 @@ def test_batch_equals_one_at_a_time():
     for w, r, err in zip(weights, batch.results, batch.errors):
         try:
             single = es.solve(task, w, second_order=False)  # the batch's default (Gauss-Newton)
-        except ILQRError as e:
+        except ILQRError:
             assert r is None and err
             continue
         assert r.cost == pytest.approx(single.cost, rel=1e-12)

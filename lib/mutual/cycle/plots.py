@@ -5,6 +5,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, FancyArrowPatch
 
+from ..constraints.gridworld import GRID_ACTIONS
 from ..constraints.plots import plot_states
 from ..style import PALETTE
 from ..supervision.dubins import avoid_value_closed_form, rotate_to_heading
@@ -19,9 +20,8 @@ def _mark_constraints(ax, grid, truth, inferred):
     cells = [i for k, i in inferred if k == "state"]
     for s in cells:
         ax.plot(*grid.coords(s), marker="x", color=PALETTE["vermillion"], ms=8, mew=2.2, ls="none")
-    from ..constraints.gridworld import GRID_ACTIONS
     actions = [GRID_ACTIONS[i] for k, i in inferred if k == "action"]
-    ax.text(0.0, -0.04, "inferred actions: " + (", ".join(actions) or "none"), transform=ax.transAxes,
+    ax.text(0.0, -0.21, "inferred actions: " + (", ".join(actions) or "none"), transform=ax.transAxes,
             fontsize=6.5, va="top")
 
 
@@ -32,7 +32,8 @@ def cycle_figure(discrete, continuous):
     ``visits1`` (X,) demonstration visits of task 1, ``robot_visits`` (X,) expected visits of the robot
     in task 2, ``act`` (compare_robots frame), ``posterior`` {robot: (T+1,)}.
     ``continuous``: ``interventions`` (n, 3), ``fit`` (SupervisorFit), ``supervisor`` (NoisySupervisor),
-    ``fp`` (false_positive_study frame), ``posterior`` {robot: (N+1,)}, ``dt``, ``crossing`` (s).
+    ``fp`` (false_positive_study frame), ``posterior`` {robot: (N+1,)}, ``dt``, ``crossing`` (s; not drawn
+    when infinite), optionally ``other_run`` {label: (dt, posterior (N+1,))} drawn dashed beside it.
     """
     fig = Figure(figsize=(10.5, 7.4))
     axes = fig.subplots(2, 3, gridspec_kw={"wspace": 0.45, "hspace": 0.75})
@@ -47,7 +48,8 @@ def cycle_figure(discrete, continuous):
                 title="2 Act: the robot in task 2 with its\nlearned constraints (shade: log10 expected visits)")
     _mark_constraints(ax, d["grid2"], d["truth"], d["inferred"])
     act = d["act"].set_index("robot")["p_break"]
-    ax.text(0.0, -0.12, "P(break a true constraint), exact:\n" + "\n".join(f"  {k}: {v:.2f}" for k, v in act.items()),
+    pairs = [f"{k}: {v:.2f}" for k, v in act.items()]
+    ax.text(0.0, -0.28, "P(break a true constraint), exact:\n" + "\n".join(", ".join(pairs[i:i + 2]) for i in range(0, len(pairs), 2)),
             transform=ax.transAxes, fontsize=6.5, va="top")
     ax = axes[0, 2]
     for name, post in d["posterior"].items():
@@ -70,10 +72,13 @@ def cycle_figure(discrete, continuous):
     for name, post in c["posterior"].items():
         ax.plot(c["dt"] * np.arange(len(post)), post, color=ROBOT_COLOURS.get(name), label=f"{name} robot")
     ax.axhline(0.95, color=PALETTE["vermillion"], lw=0.8, ls="--")
-    ax.axvline(c["crossing"], color=PALETTE["black"], lw=0.8, ls=":", label="an ignorant robot\nreaches the supervisor's level")
+    for label, (dt, post) in c.get("other_run", {}).items():
+        ax.plot(dt * np.arange(len(post)), post, color=PALETTE["black"], lw=0.8, ls="--", label=label)
+    if np.isfinite(c["crossing"]):
+        ax.axvline(c["crossing"], color=PALETTE["black"], lw=0.8, ls=":", label="an ignorant robot\nreaches the supervisor's level")
     ax.set(xlabel="time (s)", ylabel="P(H1 | motion so far)", ylim=(0.45, 1.0),
            title="3 Show: the supervisor's belief that\nthe robot avoids their safe set")
-    ax.legend(fontsize=6, loc="lower right")
+    ax.legend(fontsize=6, loc="center right")
     for row, label in ((0, "discrete loop: gridworld (ch. 2-3, 6)"), (1, "continuous loop: supervision (ch. 4-5, 7)")):
         fig.text(0.01, 0.74 - 0.46 * row, label, rotation=90, va="center", fontsize=9, fontweight="bold")
         for col in (0, 1):
@@ -184,9 +189,10 @@ def observer_figure(curves, horizon, level, sweep):
     return fig
 
 
-def evidence_figure(paths, posteriors, dt, crossing, radius, level_sets):
+def evidence_figure(paths, posteriors, dt, crossing, radius, level_sets, title="Evident safety for the supervisor (simulated)"):
     """Fig. 8.6: the iLQR paths of H0, H1 and the legible robot around the obstacle with the boundaries of
-    the unsafe sets ``{label: (w_max, level)}`` for a car heading east (+x), and the supervisor's posterior."""
+    the unsafe sets ``{label: (w_max, level)}`` for a car heading east (+x), and the supervisor's posterior
+    (the moment an ignorant robot reaches the supervisor's level, ``crossing``, is drawn when finite)."""
     fig = Figure(figsize=(9.5, 3.4), layout="constrained")
     ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.6, 1]})
     for name, r in paths.items():
@@ -203,10 +209,11 @@ def evidence_figure(paths, posteriors, dt, crossing, radius, level_sets):
     for name, post in posteriors.items():
         bx.plot(dt * np.arange(len(post)), post, color=ROBOT_COLOURS.get(name), label=f"{name} robot")
     bx.axhline(0.95, color=PALETTE["vermillion"], ls="--", lw=0.8)
-    bx.axvline(crossing, color=PALETTE["black"], ls=":", lw=0.8, label="ignorant robot reaches\nthe supervisor's level")
+    if np.isfinite(crossing):
+        bx.axvline(crossing, color=PALETTE["black"], ls=":", lw=0.8, label="ignorant robot reaches\nthe supervisor's level")
     bx.set(xlabel="time (s)", ylabel="P(H1 | motion so far)", title="supervisor's posterior")
     bx.legend(fontsize=6)
-    fig.suptitle("Evident safety for the supervisor (simulated)", fontsize=10)
+    fig.suptitle(title, fontsize=10)
     return fig
 
 

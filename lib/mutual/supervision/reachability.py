@@ -25,7 +25,7 @@ from tqdm import tqdm
 
 from .. import __version__
 from . import value_cache
-from .dubins import SPEED, DubinsCar, _check_positive, _real, avoid_value_closed_form, unsafe_reach
+from .dubins import SPEED, DubinsCar, _check_positive, _real, unsafe_reach
 from .value_function import (FULL_GRID, METHODS, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary,  # noqa: F401
                              unsafe_set_contains)
 
