@@ -192,3 +192,23 @@ def test_notebook_reports_every_claim_with_its_computation(executed_notebook):
         assert claims[cid]["note"].startswith("06_evident_safety"), cid
     assert claims["c7-fig71-ilqr-equals-riccati"]["value"] is True
     assert claims["c7-ilqr-converges"]["value"] is True
+
+
+def test_sin_ratio_derivatives_match_the_series():
+    """sin(a)/a and its first three derivatives by autodiff (what DDP and the Laplace Hessians use)
+    against the term-by-term derivatives of its Taylor series, on both sides of the series switch."""
+    import math
+
+    from mutual.motion.bicycle import sin_ratio
+
+    def series(a, n):
+        return sum((-1) ** k / math.factorial(2 * k + 1) * math.factorial(2 * k) / math.factorial(2 * k - n)
+                   * a ** (2 * k - n) for k in range(40) if 2 * k >= n)
+
+    fs = [sin_ratio]
+    for _ in range(3):
+        fs.append(jax.grad(fs[-1]))
+    with jax.enable_x64(True):
+        for a in (0.0, 1e-9, 1e-5, 0.0099, 0.0101, 0.1, 1.0, -0.7, 3.0):
+            for n, f in enumerate(fs):
+                assert float(f(a)) == pytest.approx(series(a, n), abs=1e-9), (a, n)

@@ -13,24 +13,39 @@
   control interval with the controls held constant (:func:`bicycle_step`).
 """
 
+import jax
 import jax.numpy as jnp
 
 SPEED = 3.0  # v of eq. (7.5)
 WHEELBASE = 1.0  # L of the bicycle (m); the thesis gives none: a small robot car
 
 
+@jax.custom_jvp
 def sin_ratio(a):
-    """``sin(a) / a``, smooth to every derivative order: its Taylor series for ``|a| < 1e-2``.
+    """``sin(a) / a``, smooth to every derivative order.
 
-    ``jnp.sinc`` special-cases only ``a == 0``; at tiny nonzero ``a`` its second derivative by
-    autodiff cancels terms of size ``1/a^3`` and comes out as noise (e.g. -0.25 instead of 0.02 in a
-    DDP or Laplace Hessian for a turn rate of 1e-7), so DDP and the exact Hessian need this form.
+    The value is ``jnp.sinc``; its derivative ``(a cos a - sin a) / a^2`` is given explicitly, by its
+    Taylor series for ``|a| < 1e-2``. Differentiating ``jnp.sinc`` twice by autodiff cancels terms of
+    size ``1/a^3`` at tiny nonzero ``a`` and gives noise (e.g. -0.25 instead of 0.02 in a DDP or Laplace
+    Hessian for a turn rate of 1e-7); a Taylor branch in the value itself (a ``where``) would make every
+    gradient pass about 5x slower on XLA:CPU.
     """
+    return jnp.sinc(a / jnp.pi)
+
+
+def _sin_ratio_slope(a):
+    """``d/da sin(a)/a = (a cos a - sin a) / a^2``: -a/3 + a^3/30 - a^5/840 + a^7/45360 near 0."""
     small = jnp.abs(a) < 1e-2
     safe = jnp.where(small, 1.0, a)
     a2 = a * a
-    series = 1 - a2 / 6 * (1 - a2 / 20 * (1 - a2 / 42 * (1 - a2 / 72)))
-    return jnp.where(small, series, jnp.sin(safe) / safe)
+    series = -a / 3 * (1 - a2 / 10 * (1 - a2 / 28 * (1 - a2 / 54)))
+    return jnp.where(small, series, (safe * jnp.cos(safe) - jnp.sin(safe)) / (safe * safe))
+
+
+@sin_ratio.defjvp
+def _sin_ratio_jvp(primals, tangents):
+    (a,), (da,) = primals, tangents
+    return sin_ratio(a), _sin_ratio_slope(a) * da
 
 
 def dubins_step(x, u, dt, speed=SPEED):
