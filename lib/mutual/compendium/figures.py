@@ -10,7 +10,7 @@ import re
 
 from ..atomic import atomic_path, write_text
 from ..style import CYCLE, PALETTE, use_style  # noqa: F401 (the notebooks' one import)
-from .paths import figures_dir
+from .paths import figures_dir, saved
 
 _NAME = re.compile(r"^(fig|table|anim)_[0-9]+_[a-z0-9_]+$")
 MAX_ANIMATION_BYTES = 2 * 1024 * 1024
@@ -37,7 +37,7 @@ def savefig(fig, name):
         with atomic_path(target) as tmp:
             fig.savefig(tmp, format=ext, metadata=metadata[ext])
         paths.append(target)
-    return paths
+    return saved(*paths)
 
 
 def save_animation(animation, name, fps=10, dpi=80):
@@ -56,7 +56,7 @@ def save_animation(animation, name, fps=10, dpi=80):
         if size > MAX_ANIMATION_BYTES:
             raise ValueError(f"{name}.gif would be {size / 2**20:.1f} MiB, over the 2 MiB limit: "
                              "use fewer frames or a lower dpi")
-    return target
+    return saved(target)
 
 
 def markdown_table(df, floatfmt=".3g"):
@@ -74,4 +74,4 @@ def save_table(df, name, floatfmt=".3g"):
     out = figures_dir()
     csv = write_text(out / f"{name}.csv", df.to_csv(index=False, float_format=lambda v: format(v, floatfmt)))
     md = write_text(out / f"{name}.md", markdown_table(df, floatfmt))
-    return [csv, md]
+    return saved(csv, md)

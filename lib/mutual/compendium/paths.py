@@ -22,6 +22,21 @@ CACHE = ROOT / ".cache"
 OUTPUT_ENV = "MUTUAL_OUTPUT_DIR"
 
 
+class SavedPath(type(Path())):
+    """A file the compendium wrote. A notebook shows it as ``saved figures/fig_3_1.png`` (relative to
+    the repository when inside it) rather than a machine's absolute path."""
+
+    def __repr__(self):
+        shown = self.relative_to(ROOT) if self.is_relative_to(ROOT) else self
+        return f"saved {shown}"
+
+
+def saved(*paths):
+    """``paths`` as :class:`SavedPath` (one path) or a list of them."""
+    out = [SavedPath(p) for p in paths]
+    return out[0] if len(out) == 1 else out
+
+
 def figures_dir() -> Path:
     """Folder for figures and tables: ``$MUTUAL_OUTPUT_DIR``, else the scratch folder ``build/scratch``."""
     return Path(os.environ.get(OUTPUT_ENV) or SCRATCH)

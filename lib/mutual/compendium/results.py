@@ -17,7 +17,7 @@ import numpy as np
 
 from ..atomic import write_text
 from .claims import load_claims
-from .paths import results_dir
+from .paths import results_dir, saved
 from .runs import run_record
 
 
@@ -101,7 +101,7 @@ def write_results(notebook, claims, simulated=False):
                         "note": str(entry["note"]),
                         "computed_by": str(entry["computed_by"])}
     doc = {"notebook": notebook, "run": run_record(notebook), "claims": entries}
-    return write_text(results_dir() / f"{notebook}.json", json.dumps(doc, indent=1, sort_keys=True) + "\n")
+    return saved(write_text(results_dir() / f"{notebook}.json", json.dumps(doc, indent=1, sort_keys=True) + "\n"))
 
 
 def write_extensions(notebook, results):
@@ -129,4 +129,4 @@ def write_extensions(notebook, results):
                         "simulated": bool(entry.get("simulated", True))}
     doc = {"notebook": notebook, "run": run_record(notebook), "extensions": entries}
     text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
-    return write_text(results_dir() / "extensions" / f"{notebook}.json", text)
+    return saved(write_text(results_dir() / "extensions" / f"{notebook}.json", text))

@@ -228,8 +228,9 @@ def supervision_figure(interventions, fit, supervisor, fp, refits):
            yerr=[fp["p_false_positive"] - fp["low"], fp["high"] - fp["p_false_positive"]], capsize=3)
     bx.plot(np.arange(len(fp)), fp["sampled"], "k_", ms=14, label="one sampled judgement per robot")
     bx.set_xticks(np.arange(len(fp)), fp["controller"])
-    bx.set(ylabel="P(false-positive intervention)", ylim=(0, 1.05), title="main fit (95% bootstrap CI)")
-    bx.legend(fontsize=6.5, loc="upper right")
+    bx.set(ylabel="P(false-positive intervention)", ylim=(0, 1.25), yticks=np.linspace(0, 1, 6),
+           title="main fit (95% bootstrap CI)")
+    bx.legend(fontsize=6.5, loc="upper left")
     for recovered, colour in ((True, PALETTE["green"]), (False, PALETTE["vermillion"])):
         part = refits[refits["recovered"] == recovered]
         cx.plot(part["seed"], part["p_false_positive"], "o", color=colour,
