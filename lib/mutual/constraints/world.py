@@ -19,9 +19,8 @@ States are numbered ``col + width * row``; actions follow
 """
 
 import math
-import tomllib
-from pathlib import Path
 
+from ..tomlfile import read_toml
 from .gridworld import gridworld
 
 LOITER_RULES = ("goal", "anywhere")
@@ -89,12 +88,4 @@ def world_from_mapping(mapping, source="world"):
 
 def load_world(path):
     """Read a world TOML file (module docstring) and build its gridworld; errors name the file and the key."""
-    path = Path(path)
-    try:
-        with open(path, "rb") as f:
-            mapping = tomllib.load(f)
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{path}: not valid TOML ({err})") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not valid TOML (not UTF-8 text)") from None
-    return world_from_mapping(mapping, str(path))
+    return world_from_mapping(read_toml(path), str(path))

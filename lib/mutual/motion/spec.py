@@ -34,11 +34,11 @@ The spec (every key; see ``data/README.md``)::
 """
 
 import math
-import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
+
+from ..tomlfile import read_toml
 
 DYNAMICS = ("single-integrator", "dubins")
 _KEYS = {"dynamics", "start", "goal", "distractors", "horizon", "steps", "alpha", "eta", "terminal_weight",
@@ -167,15 +167,7 @@ def legible_spec(mapping, source="spec"):
 
 def load_legible_spec(path):
     """Read a legibility spec TOML file (module docstring) and check it; errors name the file and key."""
-    path = Path(path)
-    try:
-        with open(path, "rb") as f:
-            mapping = tomllib.load(f)
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{path}: not valid TOML ({err})") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not valid TOML (not UTF-8 text)") from None
-    return legible_spec(mapping, str(path))
+    return legible_spec(read_toml(path), str(path))
 
 
 # ---- solving ---------------------------------------------------------------------------------------
