@@ -17,6 +17,8 @@ from pathlib import Path
 
 import nbformat
 
+from .results import import_dotted
+
 # calls that only convert or combine what they are given: literal in, literal out
 _PURE_BUILTINS = {"bool", "int", "float", "str", "round", "abs", "min", "max", "sum", "len", "tuple", "list",
                   "dict", "set", "sorted", "complex", "range", "zip", "enumerate", "reversed"}
@@ -56,23 +58,6 @@ def _element(container, index):
 
 def _key(node):
     return node.value if isinstance(node, ast.Constant) and isinstance(node.value, str) else None
-
-
-def _import(dotted):
-    """The module or attribute named by ``dotted`` (``a.b.c``), or None."""
-    parts = dotted.split(".")
-    for cut in range(len(parts), 0, -1):
-        try:
-            obj = importlib.import_module(".".join(parts[:cut]))
-        except ImportError:
-            continue
-        try:
-            for attr in parts[cut:]:
-                obj = getattr(obj, attr)
-        except AttributeError:
-            return None
-        return obj
-    return None
 
 
 class NotebookCode:
@@ -286,7 +271,7 @@ class NotebookCode:
                         attributes.add(node.attr)
                     chain = self._chain(node)
                     if chain and chain[0] in self.imports and chain not in cache:
-                        cache[chain] = _import(".".join([self.imports[chain[0]], *chain[1:]]))
+                        cache[chain] = import_dotted(".".join([self.imports[chain[0]], *chain[1:]]))[0]
                         if cache[chain] is not None:
                             objects.append(getattr(cache[chain], "__wrapped__", cache[chain]))
             self._refs = objects, attributes

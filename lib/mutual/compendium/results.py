@@ -39,13 +39,9 @@ def _plain(value):
     raise ValueError(f"result value {value!r} is not a number, boolean, string or list")
 
 
-def resolve_computed_by(name):
-    """The ``mutual`` function (or class, or method) named by the dotted ``name``; a ValueError
-    says why when it is not one (machinery in ``mutual.compendium`` computes no claim)."""
-    if not isinstance(name, str) or not name.startswith("mutual.") or name.startswith("mutual.compendium"):
-        raise ValueError(f"computed_by {name!r} must name a library function of mutual, e.g. "
-                         "'mutual.constraints.inference.greedy_inference' (not the compendium's machinery)")
-    parts = name.split(".")
+def import_dotted(dotted):
+    """``(obj, None)`` for the module or attribute named by ``dotted`` (``a.b.c``), else ``(None, why)``."""
+    parts = dotted.split(".")
     for cut in range(len(parts), 0, -1):
         try:
             obj = importlib.import_module(".".join(parts[:cut]))
@@ -55,11 +51,23 @@ def resolve_computed_by(name):
             for attr in parts[cut:]:
                 obj = getattr(obj, attr)
         except AttributeError:
-            raise ValueError(f"computed_by {name!r}: {'.'.join(parts[:cut])} has no {'.'.join(parts[cut:])}") from None
-        if not callable(obj):
-            raise ValueError(f"computed_by {name!r} is not a function or class")
-        return obj
-    raise ValueError(f"computed_by {name!r}: no importable module")
+            return None, f"{'.'.join(parts[:cut])} has no {'.'.join(parts[cut:])}"
+        return obj, None
+    return None, "no importable module"
+
+
+def resolve_computed_by(name):
+    """The ``mutual`` function (or class, or method) named by the dotted ``name``; a ValueError
+    says why when it is not one (machinery in ``mutual.compendium`` computes no claim)."""
+    if not isinstance(name, str) or not name.startswith("mutual.") or name.startswith("mutual.compendium"):
+        raise ValueError(f"computed_by {name!r} must name a library function of mutual, e.g. "
+                         "'mutual.constraints.inference.greedy_inference' (not the compendium's machinery)")
+    obj, why = import_dotted(name)
+    if why:
+        raise ValueError(f"computed_by {name!r}: {why}")
+    if not callable(obj):
+        raise ValueError(f"computed_by {name!r} is not a function or class")
+    return obj
 
 
 def _check_provenance(notebook, cid, entry):
