@@ -3,12 +3,12 @@ against one problem at a time, and the Explore view's response time.
 
 Fair baseline (issue 14): optax L-BFGS (zoom line search, memory 10) with its whole loop compiled
 into one ``jax.lax.while_loop``, on the same JAX objective and autodiff gradient, started from the
-same controls. It stops at the first iterate within 1e-9 (relative) of the best cost either solver
-finds (an oracle stop, which favours the baseline); iLQR stops by its own scale-free test with
-``grad_tol = 1e-5`` (remaining predicted decrease below 1e-10 of the cost's magnitude), and the row
-says whether both final costs are within 1e-9 of the reference. Times are warm (compilation
+same controls. Both solvers stop by the same rule: at the first iterate within 1e-9 (relative) of
+the best cost either solver finds (an oracle stop: ``target`` of both functions), so the times
+compare how fast each reaches the same cost. iLQR's own scale-free stopping test (``grad_tol =
+1e-5``, one more backward pass to confirm) is timed beside it. Times are warm (compilation
 excluded and reported separately, with the number of solves after which iLQR's extra compile
-time is paid back), best of several repeats, the two solvers interleaved.
+time is paid back), best of several repeats, the solvers interleaved.
 """
 
 import time
@@ -44,7 +44,7 @@ def _best(fns, repeats):
 
 
 def _versus_lbfgs(steps, repeats):
-    rows, total = [], np.zeros(4)  # ilqr seconds, lbfgs seconds, ilqr compile, lbfgs compile
+    rows, total = [], np.zeros(5)  # ilqr, ilqr own test, lbfgs seconds; ilqr, lbfgs compile
     task, w0, w1 = es.figure_scenario("7.2", steps=steps)
     agree_all = True
     for name, w in es.hypothesis_set(w0, w1).items():
@@ -54,20 +54,22 @@ def _versus_lbfgs(steps, repeats):
         c_lbfgs, (_, full, _) = _timed(lambda: solve_lbfgs_jit(dyn, run, term, x0, us0, params, rtol=1e-15))
         reference = min(tight.cost, full)
         target = reference + AGREE * abs(reference)
-        (t_ilqr, t_lbfgs), (r, (_, cost, its)) = _best(
-            [lambda: ilqr(dyn, run, term, x0, us0, params, grad_tol=1e-5),
+        (t_ilqr, t_own, t_lbfgs), (r, own, (_, cost, its)) = _best(
+            [lambda: ilqr(dyn, run, term, x0, us0, params, target=target),
+             lambda: ilqr(dyn, run, term, x0, us0, params, grad_tol=1e-5),
              lambda: solve_lbfgs_jit(dyn, run, term, x0, us0, params, target=target)], repeats)
-        agree = bool(abs(r.cost - reference) <= AGREE * abs(reference) and abs(cost - reference) <= AGREE * abs(reference))
+        agree = bool(max(abs(c - reference) for c in (r.cost, own.cost, cost)) <= AGREE * abs(reference))
         agree_all &= agree
-        total += [t_ilqr, t_lbfgs, c_ilqr - t_ilqr, c_lbfgs - t_lbfgs]
+        total += [t_ilqr, t_own, t_lbfgs, c_ilqr - t_own, c_lbfgs - t_lbfgs]
         rows.append({
             "benchmark": "ilqr", "case": f"Dubins Fig. 7.2 {name}, N={steps}: iLQR {r.iterations} it / {r.passes} passes, "
                                          f"L-BFGS {its} it",
-            "seconds": t_ilqr, "baseline": "optax L-BFGS, jitted loop, same objective and gradient, oracle stop",
-            "baseline_seconds": t_lbfgs, "compile_seconds": c_ilqr - t_ilqr,
-            "agree": f"{agree}: costs {r.cost:.12g} / {cost:.12g}, reference {reference:.12g} (rel. 1e-9)",
+            "seconds": t_ilqr, "baseline": "optax L-BFGS, jitted loop, same objective and gradient, same oracle stop",
+            "baseline_seconds": t_lbfgs, "compile_seconds": c_ilqr - t_own,
+            "agree": f"{agree}: costs {r.cost:.12g} / {cost:.12g}, reference {reference:.12g} (rel. 1e-9); iLQR with "
+                     f"its own stopping test ({own.passes} passes) {t_own:.3g} s, ratio {t_lbfgs / t_own:.2f}",
             "target": "", "met": None})
-    t_i, t_l, c_i, c_l = total
+    t_i, t_o, t_l, c_i, c_l = total
     extra = c_i - c_l
     if t_l > t_i:
         break_even = f"{max(0.0, extra) / (t_l - t_i):.0f} solves" if extra > 0 else "from the first solve"
@@ -75,10 +77,11 @@ def _versus_lbfgs(steps, repeats):
         break_even = "never (iLQR slower per solve)"
     rows.append({
         "benchmark": "ilqr", "case": f"Fig. 7.2, N={steps}: H0 + H1 + legible (the figure's three solves)",
-        "seconds": t_i, "baseline": "optax L-BFGS, jitted loop, same objective and gradient, oracle stop",
+        "seconds": t_i, "baseline": "optax L-BFGS, jitted loop, same objective and gradient, same oracle stop",
         "baseline_seconds": t_l, "compile_seconds": c_i,
-        "agree": f"{agree_all}: all three costs within 1e-9 of the reference; compile iLQR {c_i:.1f} s, "
-                 f"L-BFGS {c_l:.1f} s; break-even {break_even}",
+        "agree": f"{agree_all}: all three costs within 1e-9 of the reference; iLQR with its own stopping test "
+                 f"{t_o:.3g} s (ratio {t_l / t_o:.2f}); compile iLQR {c_i:.1f} s, L-BFGS {c_l:.1f} s; "
+                 f"break-even {break_even}",
         "target": f"iLQR >= {RATIO_TARGETS[steps]:g}x at equal cost", "met": bool(agree_all and t_l >= RATIO_TARGETS[steps] * t_i)})
     return rows
 
@@ -99,26 +102,30 @@ def _batch_rows(repeats, B=64):
         [es.EvidentSafetyTask(x0=t71.x0, goal=g, hazard=t71.hazard, horizon=t71.horizon, steps=100)
          for g in rng.uniform(-3, 3, size=(B, 2))], [v1] * B)
     for label, (tasks, weights) in cases.items():
-        def one_at_a_time():
+        def one_at_a_time(order=False):  # the batch's default (Gauss-Newton): like for like
             out = []
             for t, w in zip(tasks, weights):
                 try:
-                    out.append(es.solve(t, w, second_order=False).cost)  # the batch's default, like for like
+                    out.append(es.solve(t, w, second_order=order).cost)
                 except ILQRError:
                     out.append(np.nan)
             return np.array(out)
         c_batch, _ = _timed(lambda: es.solve_batch(tasks, weights))
         one_at_a_time()  # compile
-        (t_batch, t_single), (batch, singles) = _best([lambda: es.solve_batch(tasks, weights), one_at_a_time], repeats)
+        one_at_a_time("auto")
+        (t_batch, t_single, t_auto), (batch, singles, _) = _best(
+            [lambda: es.solve_batch(tasks, weights), one_at_a_time, lambda: one_at_a_time("auto")], repeats)
         both = np.isfinite(batch.costs) & np.isfinite(singles)
         agree = bool(np.array_equal(np.isfinite(batch.costs), np.isfinite(singles))
                      and np.allclose(batch.costs[both], singles[both], rtol=1e-9))
         passes = [r.passes for r in batch.results if r is not None]
         rows.append({
-            "benchmark": "ilqr", "case": f"batched (jax.vmap) {label}: passes per problem {min(passes)}-{max(passes)}",
+            "benchmark": "ilqr", "case": f"batched (jax.vmap, a batch that shrinks as members stop) {label}: passes "
+                                         f"per problem {min(passes)}-{max(passes)}, {len(batch) - len(passes)} failed",
             "seconds": t_batch, "baseline": "the same 64 solves one at a time (compiled Gauss-Newton iLQR)",
             "baseline_seconds": t_single, "compile_seconds": c_batch - t_batch,
-            "agree": f"{agree}: same problems converge, costs equal to 1e-9",
+            "agree": f"{agree}: same problems converge, costs equal to 1e-9; one at a time with the default "
+                     f"second_order='auto': {t_auto:.3g} s (ratio {t_auto / t_batch:.2f})",
             "target": f"per problem >= {BATCH_TARGET:g}x", "met": bool(agree and t_single >= BATCH_TARGET * t_batch)})
     return rows
 

@@ -51,7 +51,8 @@ def machine():
     threads = ", ".join(f"{k}={os.environ[k]}" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS") if k in os.environ)
     return {"cpu": f"{model} ({platform.machine()})", "cores": f"{usable} usable of {os.cpu_count()}",
             "memory": f"{memory:.1f} GiB" if memory else "unknown", "load average at start (1, 5, 15 min)": load,
-            "threads": threads or "library defaults"}
+            "threads": threads or "library defaults",
+            "XLA_FLAGS": os.environ.get("XLA_FLAGS", "") or "none (importing mutual sets one: mutual.xla_cpu)"}
 
 
 def versions():

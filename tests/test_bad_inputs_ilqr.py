@@ -46,6 +46,8 @@ CASES = [
     (ilqr, (dyn, run, term, X0, US), {"divergence_ratio": 0}, ValueError, "divergence_ratio must be a positive"),
     (ilqr, (dyn, run, term, X0, US), {"divergence_bound": -1}, ValueError, "divergence_bound must be None"),
     (ilqr, (dyn, run, term, X0, US), {"second_order": "yes"}, ValueError, "second_order must be"),
+    (ilqr, (dyn, run, term, X0, US), {"target": np.inf}, ValueError, "target must be None or a finite number"),
+    (ilqr, (dyn, run, term, X0, US), {"target": "low"}, ValueError, "target must be None or a finite number"),
     (ilqr, (dyn, run, term, X0, US, np.array([np.nan])), {}, ValueError, "params must be finite"),
     (ilqr, (dyn, lambda x, u, p: -jnp.sum(u ** 2), term, X0, US), {}, ILQRError, "unbounded"),
     # ilqr_batch

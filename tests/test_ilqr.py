@@ -236,6 +236,32 @@ def test_batch_equals_one_at_a_time():
     assert "problems" in repr(batch)
 
 
+def test_a_shrinking_batch_gives_each_member_its_own_passes():
+    """Members that stop early leave the batch (gathered into ever smaller batches): each member
+    still takes exactly the passes, and reaches the cost, that it takes alone."""
+    task, w0, w1 = es.figure_scenario("7.2", steps=30)
+    alphas = np.linspace(0.3, 3.0, 20)  # legible solves of very different lengths
+    weights = [es.legible_weights(w1, w0, a) for a in alphas]
+    batch = es.solve_batch(task, weights)
+    passes = []
+    for w, r in zip(weights, batch.results):
+        single = es.solve(task, w, second_order=False)
+        assert r.passes == single.passes and r.iterations == single.iterations
+        assert r.cost == pytest.approx(single.cost, rel=1e-12)
+        passes.append(r.passes)
+    assert max(passes) > 2 * min(passes)  # the batch really had to shrink
+
+
+def test_target_stops_at_the_first_step_that_reaches_it():
+    task, w0, w1 = es.figure_scenario("7.2", steps=30)
+    full = es.solve(task, w1, grad_tol=1e-9)
+    target = full.cost + 1e-6 * abs(full.cost)
+    early = es.solve(task, w1, target=target)
+    assert early.cost <= target and early.costs[-2] > target
+    assert early.iterations < full.iterations
+    np.testing.assert_allclose(early.costs, full.costs[:early.iterations + 1], rtol=1e-12)
+
+
 def test_multistart_reports_disagreeing_runs():
     """The legible Fig. 7.2 problem has two routes around the hazard: starts turning either way find both."""
     task, w0, w1 = es.figure_scenario("7.2", steps=30)

@@ -71,7 +71,7 @@ class ILQRResult:
                 f"m={m}, relative decrease={self.decrease:.1e})")
 
 
-def _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound):
+def _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound, target=None):
     tol = dict(grad_tol=grad_tol, stall_tol=stall_tol, step_tol=step_tol, reg_max=reg_max,
                divergence_ratio=divergence_ratio)
     for name, value in tol.items():
@@ -83,7 +83,13 @@ def _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, diverg
         divergence_bound = np.inf
     elif not (isinstance(divergence_bound, (int, float, np.integer, np.floating)) and divergence_bound > 0):
         raise ValueError(f"divergence_bound must be None or a positive number, got {divergence_bound!r}")
-    return {**{k: float(v) for k, v in tol.items()}, "divergence_bound": float(divergence_bound)}
+    if target is None:
+        target = -np.inf
+    elif isinstance(target, (bool, np.bool_)) or not (isinstance(target, (int, float, np.integer, np.floating))
+                                                      and np.isfinite(target)):
+        raise ValueError(f"target must be None or a finite number, got {target!r}")
+    return {**{k: float(v) for k, v in tol.items()}, "divergence_bound": float(divergence_bound),
+            "target": float(target)}
 
 
 def _max_iter(max_iter):
@@ -194,7 +200,7 @@ def trajectory_cost_grad(dynamics, running_cost, terminal_cost, x0, us, params=N
 @x64
 def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=200, grad_tol=1e-6,
          stall_tol=1e-12, reg_max=1e10, divergence_bound=None, second_order="auto", *, step_tol=1e-8,
-         divergence_ratio=1e8):
+         divergence_ratio=1e8, target=None):
     """Minimise the total cost from ``x0`` by iLQR, starting from the controls ``us0`` (N, m);
     return an :class:`ILQRResult`.
 
@@ -212,9 +218,11 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     curvature and the solve goes on, at most ``SADDLE_ESCAPES`` times, before it is reported.
     ``second_order``: False for Gauss-Newton iLQR, True for full DDP, ``"auto"`` (default)
     Gauss-Newton far from the minimum and DDP close to it (:mod:`mutual.motion.ilqr_core`).
+    ``target``: also stop at the first accepted step whose cost is at most ``target`` (NLopt's
+    ``stopval``; e.g. a known optimum plus a tolerance, to time solvers to equal cost).
     """
     max_iter = _max_iter(max_iter)
-    tol = _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound)
+    tol = _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound, target)
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
     solve = kernels(dynamics, running_cost, terminal_cost)[2]
     for _ in range(SADDLE_ESCAPES + 1):
@@ -266,22 +274,22 @@ class ILQRBatch:
 @x64
 def ilqr_batch(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=200, grad_tol=1e-6,
                stall_tol=1e-12, reg_max=1e10, divergence_bound=None, second_order=False, *, step_tol=1e-8,
-               divergence_ratio=1e8):
-    """Solve ``B`` problems at once (``jax.vmap`` of :func:`ilqr`'s compiled loop, same tests).
+               divergence_ratio=1e8, target=None):
+    """Solve ``B`` problems at once (:func:`ilqr`'s compiled passes under ``jax.vmap``, same tests).
 
     ``x0`` (B, n) start states, ``us0`` (B, N, m) initial controls and ``params`` a pytree whose
-    every leaf has a leading axis of length B (e.g. stacked goals, weights or alphas). The batch
-    runs until its slowest member stops; each member's result equals what :func:`ilqr` returns
-    for it alone. Returns an :class:`ILQRBatch` (failures are reported per problem, not raised).
+    every leaf has a leading axis of length B (e.g. stacked goals, weights or alphas). Each
+    member takes the passes it takes alone and its result equals what :func:`ilqr` returns for it
+    (without the saddle escapes). A batch of 16 or more shrinks as its members stop, so a few
+    slow members run on in a small batch instead of keeping the whole batch busy. Returns an
+    :class:`ILQRBatch` (failures are reported per problem, not raised).
 
-    The default is Gauss-Newton (``second_order=False``): under ``vmap`` both branches of the
-    "auto" switch run for every member, and the dynamics' Hessians that DDP needs made a batched
-    pass about 6x dearer (measured on Fig. 7.2: 9.7 ms against 1.5 ms per pass of 64 problems).
-    A batch runs as many passes as its slowest member needs, so it pays off when the members
-    converge alike (e.g. LQ problems); ``bench/bench_ilqr.py`` measures both cases.
+    The default is Gauss-Newton (``second_order=False``); with ``"auto"`` a batched pass computes
+    the dynamics' Hessians whenever any member is near its minimum. ``bench/bench_ilqr.py``
+    measures batches against the same problems solved one at a time.
     """
     max_iter = _max_iter(max_iter)
-    tol = _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound)
+    tol = _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound, target)
     x0, us = check_batch(dynamics, running_cost, terminal_cost, x0, us0, params)
     solve = kernels(dynamics, running_cost, terminal_cost)[3]
     xs, us, K, costs, summary = jax.device_get(solve(x0, us, params, tol, _order(second_order), max_iter))
