@@ -15,11 +15,11 @@ import time
 
 import numpy as np
 
-from mutual.motion import evident_safety as es
-from mutual.motion import explore
-from mutual.motion.ilqr import ILQRError, ilqr, solve_lbfgs_jit
-from mutual.motion.legibility import single_integrator
-from mutual.motion.legibility import solve as solve_riccati
+from mutual.motion.evident import safety as es
+from mutual.motion.evident import explore
+from mutual.motion.trajopt import ILQRError, ilqr, solve_lbfgs_jit
+from mutual.motion.legible import single_integrator
+from mutual.motion.legible import solve as solve_riccati
 
 RATIO_TARGETS = {100: 2.0, 400: 1.0}  # iLQR speed-up over jitted L-BFGS at equal cost (issue 14)
 BATCH_TARGET = 4.0  # per-problem speed-up of a vmapped batch of 64 over one at a time

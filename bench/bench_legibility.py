@@ -3,7 +3,7 @@
 * Corollary 6.4.2.1: the legible LQ solve against the plain one (same NumPy Riccati recursion).
 * Legible LQR (compiled Riccati, ``backend="jax"``) against Dragan and Srinivasa's functional
   gradient with a banded Cholesky solve of its metric (``scipy.linalg.solveh_banded``, the
-  library's :func:`mutual.motion.dragan.optimise_legibility`), stopped at the first iteration whose
+  library's :func:`mutual.motion.legible.dragan.optimise_legibility`), stopped at the first iteration whose
   score is within 1e-6 of its converged score (an oracle stopping point: favourable to the
   baseline). Double integrator ``p'' = u`` for ours (n = 2 d states), D&S in its configuration
   space of dimension d; N in {100, 500, 1000}, goals in {2, 5, 20}, d in {2, 6}; the true goal is
@@ -23,11 +23,11 @@ import time
 
 import numpy as np
 
-from mutual.motion import dragan as ds
-from mutual.motion import explore_legibility
-from mutual.motion import legibility as leg
-from mutual.motion import timing
-from mutual.motion.qp import multi_distractor_qp
+from mutual.motion.legible import dragan as ds
+from mutual.motion.legible import explore as explore_legibility
+from mutual.motion import legible as leg
+from mutual.motion.legible import timing
+from mutual.motion.legible.qp import multi_distractor_qp
 
 SCORE_TOL = 1e-6
 

@@ -5,10 +5,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from mutual.motion import animation, belief, evidence, explore, mpc
-from mutual.motion import evident_safety as es
-from mutual.motion.ilqr import ILQRError, ilqr, ilqr_batch
-from mutual.motion.multistart import MultiStart
+from mutual.motion import animation, belief
+from mutual.motion.evident import evidence, explore, mpc
+from mutual.motion.evident import safety as es
+from mutual.motion.trajopt import ILQRError, ilqr, ilqr_batch
+from mutual.motion.trajopt.multistart import MultiStart
 
 
 def dyn(x, u, p):

@@ -4,8 +4,10 @@ message names the argument and the reason, never a NaN or a silently different a
 import numpy as np
 import pytest
 
-from mutual.motion import anticipation, dragan, explore_legibility, legibility as leg, observer, path_measures, qp
-from mutual.motion.lqr import solve_lq
+from mutual.motion import observer
+from mutual.motion import legible as leg
+from mutual.motion.legible import anticipation, dragan, explore as explore_legibility, path_measures, qp
+from mutual.motion.legible.lqr import solve_lq
 
 DT, N = 0.1, 10
 DYN = leg.single_integrator(2, DT)

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from mutual.motion import belief, observer
-from mutual.motion import evident_safety as es
-from mutual.motion.legibility import random_lq_hypotheses, single_integrator
+from mutual.motion.evident import task_belief
+from mutual.motion.evident import safety as es
+from mutual.motion.legible import random_lq_hypotheses, single_integrator
 
 
 def test_full_motion_posterior_is_the_closed_form_likelihood_ratio():
@@ -25,7 +26,7 @@ def test_full_motion_posterior_is_the_closed_form_likelihood_ratio():
 def test_prefix_marginal_matches_brute_force_integration():
     """N = 2 scalar controls: the Gaussian marginal of u_0 against a quadrature of exp(-J) over u_1."""
     dyn = single_integrator(1, 0.5)
-    from mutual.motion.legibility import reaching_cost
+    from mutual.motion.legible import reaching_cost
     J = reaching_cost(np.array([1.0]), dt=0.5, terminal_weight=2.0, effort_weight=1.0)
     mean, P = belief.lq_gaussian(dyn, J, np.zeros(1), 2)
     grid = np.linspace(-12, 12, 4001)
@@ -50,7 +51,7 @@ def test_continuation_formula_is_exact_in_the_lq_case():
     for name, w in (("H0", w0), ("H1", w1)):
         exact = belief.gaussian_prefix_loglik(us, *belief.lq_gaussian(single_integrator(2, task.dt), costs[name],
                                                                         task.x0, task.steps))
-        approx = belief.continuation_loglik(task, w, us, optima[name])
+        approx = task_belief.continuation_loglik(task, w, us, optima[name])
         np.testing.assert_allclose(approx, exact, atol=1e-8)
 
 
@@ -87,7 +88,7 @@ def test_laplace_belief_against_brute_force_on_a_tiny_nonlinear_problem(beta):
     errors = []
     for u0 in (optima["H0"].us[0, 0], optima["H1"].us[0, 0], optima["H1"].us[0, 0] + 0.2):
         i = np.argmin(np.abs(grid - u0))
-        ours = belief.belief_over_time(task, w0, w1, np.array([[grid[i]], [0.0]]), optima, times=np.array([1]))[0]
+        ours = task_belief.belief_over_time(task, w0, w1, np.array([[grid[i]], [0.0]]), optima, times=np.array([1]))[0]
         errors.append(abs(ours - brute[i]))
     assert max(errors) < 0.02
 
@@ -95,10 +96,10 @@ def test_laplace_belief_against_brute_force_on_a_tiny_nonlinear_problem(beta):
 def test_belief_starts_at_the_prior_and_bad_inputs_are_named():
     task, w0, w1 = es.figure_scenario("7.1", steps=10)
     optima = es.solve_hypotheses(task, w0, w1)
-    b = belief.belief_over_time(task, w0, w1, optima["legible"].us, optima, prior=0.2)
+    b = task_belief.belief_over_time(task, w0, w1, optima["legible"].us, optima, prior=0.2)
     assert b[0] == pytest.approx(0.2)
     assert b[-1] > 0.2  # the legible motion is evidence for H1
     with pytest.raises(ValueError, match="prior"):
-        belief.belief_over_time(task, w0, w1, optima["legible"].us, optima, prior=1.0)
+        task_belief.belief_over_time(task, w0, w1, optima["legible"].us, optima, prior=1.0)
     with pytest.raises(ValueError, match="positive definite"):
         belief.gaussian_prefix_loglik(np.zeros((2, 1)), np.zeros((2, 1)), -np.eye(2))

@@ -12,7 +12,7 @@ from mutual.cycle.evidence import (PROBLEM, SafeSetTask, avoid_value, first_conf
                                    ILQR_OPTIONS)
 from mutual.cycle.laplace import posterior_over_time, prefix_log_likelihoods
 from mutual.cycle.supervision import closed_form_library, closed_form_value_function, false_positive_study
-from mutual.motion.legibility import reaching_cost, single_integrator
+from mutual.motion.legible import reaching_cost, single_integrator
 from mutual.motion.observer import log_boltzmann
 from mutual.supervision.dubins import avoid_value_closed_form
 from mutual.supervision.reachability import QUICK_GRID
@@ -106,7 +106,7 @@ def test_ignorant_path_drives_through_and_avoiding_paths_keep_out(safe_task):
 
 
 def test_ilqr_paths_are_stationary_by_autodiff(safe_task):
-    from mutual.motion.ilqr import trajectory_cost_grad
+    from mutual.motion.trajopt import trajectory_cost_grad
     task, hyp = safe_task
     for name in ("H1", "legible"):
         r = solve_path(task, hyp[name])

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mutual.motion.dragan import (goal_posterior, gradient_linear_structure, legibility_score, optimise_legibility, score_gradient,
+from mutual.motion.legible.dragan import (goal_posterior, gradient_linear_structure, legibility_score, optimise_legibility, score_gradient,
                                       score_weights, trajectory_cost)
 
 GOALS = np.array([[-1.0, 1.0], [1.0, 1.0]])
@@ -106,8 +106,8 @@ def test_notebook_measures_the_corollary(executed_notebook):
     entry = res["c6-corollary-same-complexity"]
     assert isinstance(entry["value"], bool)
     assert "N = " in entry["note"] and "at most twice" in entry["note"]
-    assert entry["computed_by"] == "mutual.motion.timing.corollary_time_ratios"
-    assert res["c6-dragan-eq11-linear"]["computed_by"] == "mutual.motion.dragan.gradient_linear_structure"
+    assert entry["computed_by"] == "mutual.motion.legible.timing.corollary_time_ratios"
+    assert res["c6-dragan-eq11-linear"]["computed_by"] == "mutual.motion.legible.dragan.gradient_linear_structure"
 
 
 def test_banded_metric_solve_equals_the_explicit_inverse():

@@ -5,11 +5,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from mutual.motion import evident_safety as es
+from mutual.motion.evident import evidence, vehicles
+from mutual.motion.evident import safety as es
 from mutual.supervision.dubins import dubins_step as dubins_step_numpy
-from mutual.motion.ilqr import ILQRError
-from mutual.motion.legibility import single_integrator
-from mutual.motion.legibility import solve as solve_riccati
+from mutual.motion.trajopt import ILQRError
+from mutual.motion.legible import single_integrator
+from mutual.motion.legible import solve as solve_riccati
 
 
 def test_dubins_step_integrates_eq_7_5_exactly_for_constant_turn_rates():
@@ -17,7 +18,7 @@ def test_dubins_step_integrates_eq_7_5_exactly_for_constant_turn_rates():
     for x0, u in [(rng.normal(size=3), 1.7), (rng.normal(size=3), 0.0), (rng.normal(size=3), -4.0)]:
         ode = solve_ivp(lambda t, x: [3 * np.cos(x[2]), 3 * np.sin(x[2]), u], (0, 0.3), x0, rtol=1e-12, atol=1e-12)
         with jax.enable_x64(True):
-            ours = np.asarray(es.dubins_step(x0, np.array([u]), 0.3))
+            ours = np.asarray(vehicles.dubins_step(x0, np.array([u]), 0.3))
         np.testing.assert_allclose(ours, ode.y[:, -1], atol=1e-9)
 
 
@@ -25,7 +26,7 @@ def test_dubins_step_agrees_with_chapter_5s_numpy_integrator():
     rng = np.random.default_rng(1)
     states, controls = rng.normal(size=(20, 3)), rng.normal(size=20)
     with jax.enable_x64(True):
-        ours = np.array(jax.vmap(es.dubins_step, in_axes=(0, 0, None))(states, controls[:, None], 0.1))
+        ours = np.array(jax.vmap(vehicles.dubins_step, in_axes=(0, 0, None))(states, controls[:, None], 0.1))
     theirs = dubins_step_numpy(states, controls, 0.1)
     np.testing.assert_allclose(ours[:, :2], theirs[:, :2], atol=1e-12)
     np.testing.assert_allclose(np.angle(np.exp(1j * ours[:, 2])), theirs[:, 2], atol=1e-12)
@@ -114,7 +115,7 @@ def test_lbfgs_finds_nothing_better_near_ilqrs_dubins_optima(dubins):
 
 def test_dubins_story_h1_slightly_farther_legible_obviously_farther(dubins):
     task, _, _, results = dubins
-    d = {k: es.distance_to_point(r.xs, task.hazard, task.dt) for k, r in results.items()}
+    d = {k: evidence.distance_to_point(r.xs, task.hazard, task.dt) for k, r in results.items()}
     assert d["H0"]["integral"] < d["H1"]["integral"] < 1.05 * d["H0"]["integral"]
     assert d["legible"]["integral"] > 1.3 * d["H1"]["integral"]
     assert d["legible"]["min"] > 1.5 * d["H1"]["min"]
@@ -123,7 +124,7 @@ def test_dubins_story_h1_slightly_farther_legible_obviously_farther(dubins):
 def test_distance_to_point_closed_form():
     t = np.linspace(0, 2, 201)
     xs = np.c_[t - 1, np.ones_like(t)]  # the line y = 1 from x = -1 to 1, unit speed
-    d = es.distance_to_point(xs, [0, 0], dt=0.01)
+    d = evidence.distance_to_point(xs, [0, 0], dt=0.01)
     assert d["min"] == pytest.approx(1.0)
     assert d["integral"] == pytest.approx(np.arcsinh(1) + np.sqrt(2), rel=1e-5)  # int sqrt(1 + s^2) ds
 
@@ -150,7 +151,7 @@ def test_bicycle_step_integrates_the_kinematic_bicycle():
         ode = solve_ivp(lambda t, x: [x[3] * np.cos(x[2]), x[3] * np.sin(x[2]), x[3] * np.tan(u[0]) / 1.0, u[1]],
                         (0, 0.04), x0, rtol=1e-12, atol=1e-12)
         with jax.enable_x64(True):
-            ours = np.asarray(es.bicycle_step(x0, u, 0.04, 1.0))
+            ours = np.asarray(vehicles.bicycle_step(x0, u, 0.04, 1.0))
         np.testing.assert_allclose(ours, ode.y[:, -1], atol=1e-8)
 
 
@@ -165,7 +166,6 @@ def test_figure_6_1_uses_the_bicycle():
 
 
 def test_evidence_rules():
-    from mutual.motion import evidence
     t = np.linspace(0, 1, 11)
     h0 = np.c_[2 * t - 1, np.full_like(t, 0.2)]  # passes 0.2 from the hazard at the origin at t = 0.5
     far = np.c_[2 * t - 1, 0.2 + np.minimum(t, 1 - t) * 2]  # bends away from the start
@@ -199,7 +199,7 @@ def test_sin_ratio_derivatives_match_the_series():
     against the term-by-term derivatives of its Taylor series, on both sides of the series switch."""
     import math
 
-    from mutual.motion.bicycle import sin_ratio
+    from mutual.motion.evident.vehicles import sin_ratio
 
     def series(a, n):
         return sum((-1) ** k / math.factorial(2 * k + 1) * math.factorial(2 * k) / math.factorial(2 * k - n)

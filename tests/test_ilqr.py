@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from mutual.motion.ilqr import ILQRError, ilqr, rollout, trajectory_cost, trajectory_cost_grad
-from mutual.motion.lqr import solve_lq
+from mutual.motion.trajopt import ILQRError, ilqr, rollout, trajectory_cost, trajectory_cost_grad
+from mutual.motion.legible.lqr import solve_lq
 
 
 def _random_lq(seed=0, n=4, m=2, N=30):
@@ -162,8 +162,8 @@ def test_bad_inputs_are_named():
 
 # ---- scale-free tests (issue 13): the same answer for any scale of the objective and any start ------------
 
-from mutual.motion import evident_safety as es  # noqa: E402
-from mutual.motion.ilqr import iteration_flops, solve_lbfgs_jit  # noqa: E402
+from mutual.motion.evident import safety as es  # noqa: E402
+from mutual.motion.trajopt import iteration_flops, solve_lbfgs_jit  # noqa: E402
 
 
 @pytest.mark.parametrize("scale", [1e-6, 1e6, 1e4])

@@ -5,13 +5,13 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from mutual.motion import anticipation, explore_legibility, predictability
-from mutual.motion.legibility import (distractor_mixture, double_integrator, legible_cost, legible_trajectory,
+from mutual.motion.legible import anticipation, explore as explore_legibility, predictability
+from mutual.motion.legible import (distractor_mixture, double_integrator, legible_cost, legible_trajectory,
                                       linear_alpha_schedule, LinearDynamics, QuadraticCost, reaching_cost,
                                       receding_horizon, single_integrator, solve)
 from mutual.motion.observer import (lifted_cost, likelihood_ratio_minimiser, log_boltzmann, log_boltzmann_prefix,
                                     log_likelihood_ratio, posterior_over_time, weighted_prefix_log_likelihood)
-from mutual.motion.qp import multi_distractor_qp
+from mutual.motion.legible.qp import multi_distractor_qp
 
 DT, N = 0.01, 100
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])

@@ -92,7 +92,7 @@ def test_the_example_spec_loads_with_its_documented_defaults():
 def test_lqr_equals_the_likelihood_ratio_minimiser():
     """Theorem 6.4.2 by a second algorithm: the minimiser of log Lambda + alpha J1 from the two
     Gaussians' means and precisions equals the Riccati solution of (1 + alpha) J1 - J0."""
-    from mutual.motion.legibility import reaching_cost, single_integrator
+    from mutual.motion.legible import reaching_cost, single_integrator
     from mutual.motion.observer import likelihood_ratio_minimiser
     spec = legible_spec(spec_with(alpha=0.7, goal=[2.0, 1.0], terminal_weight=3.0))
     out = solve_legible(spec)
@@ -117,7 +117,7 @@ def test_several_distractors_use_their_mean_cost():
 def test_qp_meets_its_evidence_bound():
     spec = legible_spec(spec_with(alpha=None, eta=-3.0, distractors=[[-1.0, 1.0], [0.0, -1.0]]))
     out = solve_legible(spec)
-    from mutual.motion.legibility import reaching_cost
+    from mutual.motion.legible import reaching_cost
     J1 = reaching_cost(spec.goal, spec.dt)
     xs, us = out["legible"]
     gaps = [J1.value(xs, us) - reaching_cost(g, spec.dt).value(xs, us) for g in spec.distractors]
@@ -133,7 +133,7 @@ def test_receding_horizon_raises_alpha_over_the_horizon():
 
 def test_dubins_legible_is_a_stationary_point_and_exaggerates():
     from mutual.motion import spec as module
-    from mutual.motion.ilqr import trajectory_cost_grad
+    from mutual.motion.trajopt import trajectory_cost_grad
     spec = legible_spec({"dynamics": "dubins", "start": [0.0, 0.0, np.pi / 2], "goal": [1.5, 2.5],
                          "distractors": [[-1.5, 2.5]], "horizon": 1.0, "steps": 30, "alpha": 1.0,
                          "terminal_weight": 10.0, "effort_weight": 0.1})

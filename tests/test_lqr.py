@@ -5,7 +5,7 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from mutual.motion.lqr import lq_cost, solve_lq
+from mutual.motion.legible.lqr import lq_cost, solve_lq
 
 
 def random_problem(seed, n=3, m=2, N=12, convex_state=True, q_scale=0.02):

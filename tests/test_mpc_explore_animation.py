@@ -5,9 +5,10 @@ import hashlib
 import numpy as np
 import pytest
 
-from mutual.motion import animation, explore, mpc
-from mutual.motion import evident_safety as es
-from mutual.motion.legibility import linear_alpha_schedule
+from mutual.motion import animation
+from mutual.motion.evident import explore, mpc
+from mutual.motion.evident import safety as es
+from mutual.motion.legible import linear_alpha_schedule
 
 
 @pytest.fixture(scope="module")

@@ -5,8 +5,8 @@ the Riccati recursion (both backends) against one dense KKT solve, and the legib
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from mutual.motion.legibility import legible_trajectory
-from mutual.motion.lqr import lq_cost, solve_lq
+from mutual.motion.legible import legible_trajectory
+from mutual.motion.legible.lqr import lq_cost, solve_lq
 from mutual.motion.observer import likelihood_ratio_minimiser, log_likelihood_ratio
 
 from test_legibility import random_hypotheses

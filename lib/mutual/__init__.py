@@ -18,12 +18,16 @@ The two together (Figure 8.1):
 :mod:`mutual.compendium` is the machinery of this repository (paths, figures, the report); the
 algorithms never import it.
 
-Importing :mod:`mutual` raises XLA:CPU's small-loop threshold (:mod:`mutual.xla_cpu`), which
-makes the compiled iLQR, L-BFGS and Riccati loops about 2x faster.
+Importing :mod:`mutual` imports no numerical library. It raises XLA:CPU's small-loop threshold
+(:mod:`mutual.xla_cpu`), which makes the compiled iLQR, L-BFGS and Riccati loops about 2x faster,
+and turns on JAX's persistent compilation cache in the compendium's cache folder
+(:mod:`mutual.jax_cache`), so a program compiled once is loaded from disk by later processes.
 """
 
+from .jax_cache import use_persistent_cache
 from .xla_cpu import use_small_loop_threshold
 
 __version__ = "0.1.0"
 
 use_small_loop_threshold()
+use_persistent_cache()

@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..motion.ilqr import ILQRError, ilqr
+from ..motion.trajopt import ILQRError, ilqr
 
 
 @lru_cache(maxsize=64)
@@ -76,7 +76,7 @@ def _prefix_costs(dynamics, running_cost, x0, us, params):
 def best_tail(dynamics, running_cost, terminal_cost, x, t, params, guesses, **ilqr_options):
     """The lowest-cost iLQR optimum of the tail from state ``x`` at stage ``t`` over runs from the (N, m)
     control ``guesses`` (their stages before t are ignored), in the padded problem (state (x, clock)).
-    Returns the padded :class:`mutual.motion.ilqr.ILQRResult`; raises ILQRError if no run converges.
+    Returns the padded :class:`mutual.motion.trajopt.ILQRResult`; raises ILQRError if no run converges.
     With ``t = 0`` this solves the whole problem (one compiled iLQR serves paths and tails alike)."""
     dyn, run, term, _ = _padded(dynamics, running_cost, terminal_cost)
     z0 = np.concatenate([np.asarray(x, float), [0.0]])
@@ -100,7 +100,7 @@ def tail_optimum(dynamics, running_cost, terminal_cost, x, t, steps, params, gue
     """The best local optimum of the tail from state ``x`` at stage ``t`` (N = ``steps`` in all), by
     :func:`best_tail`, with the log-determinant of the tail's Hessian in its controls. Returns
     ``(cost J*_tail, log det H_tail, tail controls (N - t, m))``; raises ILQRError if no run converges or
-    the Hessian is not positive definite. ``ilqr_options`` go to :func:`mutual.motion.ilqr.ilqr`."""
+    the Hessian is not positive definite. ``ilqr_options`` go to :func:`mutual.motion.trajopt.ilqr`."""
     best = best_tail(dynamics, running_cost, terminal_cost, x, t, params, guesses, **ilqr_options)
     hessian = _padded(dynamics, running_cost, terminal_cost)[3]
     z0 = np.concatenate([np.asarray(x, float), [0.0]])

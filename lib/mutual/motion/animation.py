@@ -13,7 +13,8 @@ from matplotlib.figure import Figure
 
 from ..style import PALETTE
 from . import belief as belief_lib
-from .evident_plots import STYLE
+from .evident.plots import STYLE
+from .evident.task_belief import belief_over_time
 
 MAX_FRAMES = 60
 
@@ -98,12 +99,12 @@ def belief_animation(paths, beliefs, dt, times=None, frames=40, goal=None, hazar
 
 
 def task_belief_animation(task, w0, w1, results, times=None, frames=40, title=""):
-    """:func:`belief_animation` for an :class:`mutual.motion.evident_safety.EvidentSafetyTask` and its
+    """:func:`belief_animation` for an :class:`mutual.motion.evident.safety.EvidentSafetyTask` and its
     solved hypotheses ``results = {"H0": ..., "H1": ..., "legible": ...}`` (ILQRResults): every
-    path's belief is :func:`mutual.motion.belief.belief_over_time` (exact for ``x' = u``,
+    path's belief is :func:`mutual.motion.evident.task_belief.belief_over_time` (exact for ``x' = u``,
     Laplace around the optimal continuation otherwise) at ``times`` (default: the frame steps)."""
     times = _frame_steps(task.steps, frames) if times is None else np.asarray(times, int)
-    beliefs = {k: belief_lib.belief_over_time(task, w0, w1, r.us, results, times=times) for k, r in results.items()}
+    beliefs = {k: belief_over_time(task, w0, w1, r.us, results, times=times) for k, r in results.items()}
     return belief_animation({k: r.xs for k, r in results.items()}, beliefs, task.dt, times=times, frames=frames,
                             goal=task.goal, hazard=task.hazard, keep_out=task.keep_out, title=title)
 
@@ -111,8 +112,8 @@ def task_belief_animation(task, w0, w1, results, times=None, frames=40, title=""
 def lq_belief_animation(dynamics, J0, J1, x0, controls, dt, frames=40, goals=None, title="", styles=None):
     """:func:`belief_animation` for a linear-quadratic problem of chapter 6 (e.g. Fig. 6.2): the
     exact Gaussian observer of eq. (6.8) for ``J0`` and ``J1``
-    (:class:`mutual.motion.legibility.QuadraticCost`) under ``dynamics``
-    (:class:`mutual.motion.legibility.LinearDynamics`) from ``x0``, and ``controls``
+    (:class:`mutual.motion.legible.problem.QuadraticCost`) under ``dynamics``
+    (:class:`mutual.motion.legible.problem.LinearDynamics`) from ``x0``, and ``controls``
     ``{name: us (N, m)}`` whose paths are rolled out here. ``goals`` (k, 2) are drawn as stars."""
     if not controls:
         raise ValueError("controls must be a non-empty dict {name: us (N, m)}")

@@ -24,16 +24,12 @@ Marginals of every prefix come from one Cholesky factor: with ``Sigma = L L'`` (
 ``log N(u_{0:t}) = sum_{j < t m} (-z_j^2 / 2 - log L_jj - log(2 pi) / 2)``.
 """
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import evident_safety as es
-from .ilqr_core import kernels
-from .mpc import continuation_costs
-from .legibility import single_integrator
 from .observer import lifted_cost
-from .problem_checks import check_problem, x64
+from .trajopt.checks import check_problem, x64
+from .trajopt.compiled import kernels
 
 
 def _precision(name, precision, d):
@@ -47,6 +43,13 @@ def _precision(name, precision, d):
         raise ValueError(f"{name} is not positive definite: exp(-J) is not normalisable around this point, "
                          "so P(u | H) of eq. (6.8) has no Gaussian (Laplace) form here") from None
     return P
+
+
+def check_prior(prior):
+    """Refuse a prior ``P(H1)`` that is not a number strictly between 0 and 1."""
+    if isinstance(prior, (bool, np.bool_)) or not isinstance(prior, (int, float, np.integer, np.floating)) \
+            or not 0 < prior < 1:
+        raise ValueError(f"prior must be a probability strictly between 0 and 1, got {prior!r}")
 
 
 def gaussian_prefix_loglik(us, mean, precision):
@@ -72,9 +75,7 @@ def gaussian_prefix_loglik(us, mean, precision):
 def posterior_over_time(us, gaussian0, gaussian1, prior=0.5):
     """``P(H1 | u_{0:t})`` for ``t = 0..N`` (N+1,) from the Gaussians ``(mean, precision)`` of
     ``P(u | H0)`` and ``P(u | H1)`` and the prior ``P(H1) = prior`` (eq. (6.8) and Bayes' rule)."""
-    if isinstance(prior, (bool, np.bool_)) or not isinstance(prior, (int, float, np.integer, np.floating)) \
-            or not 0 < prior < 1:
-        raise ValueError(f"prior must be a probability strictly between 0 and 1, got {prior!r}")
+    check_prior(prior)
     log0 = gaussian_prefix_loglik(us, *gaussian0)
     log1 = gaussian_prefix_loglik(us, *gaussian1)
     logit = log1 - log0 + np.log(prior / (1 - prior))
@@ -83,8 +84,8 @@ def posterior_over_time(us, gaussian0, gaussian1, prior=0.5):
 
 def lq_gaussian(dynamics, cost, x0, N):
     """The exact Gaussian ``P(u | H) = N(mean, precision^-1)`` of eq. (6.8) for linear dynamics
-    (:class:`mutual.motion.legibility.LinearDynamics`) and a quadratic cost
-    (:class:`mutual.motion.legibility.QuadraticCost`); returns ``(mean (N, m), precision)``."""
+    (:class:`mutual.motion.legible.LinearDynamics`) and a quadratic cost
+    (:class:`mutual.motion.legible.QuadraticCost`); returns ``(mean (N, m), precision)``."""
     H, h, _ = lifted_cost(dynamics, cost, x0, N)
     P = _precision("the cost's Hessian in the controls", H, H.shape[0])
     return np.linalg.solve(P, -h).reshape(N, -1), P
@@ -93,7 +94,7 @@ def lq_gaussian(dynamics, cost, x0, N):
 @x64
 def laplace_gaussian(dynamics, running_cost, terminal_cost, x0, us_opt, params=None):
     """The Laplace approximation ``N(u*, [d^2 H_J(u*)]^-1)`` of eq. (6.8) around an optimum ``u*``
-    (N, m) (e.g. an :class:`mutual.motion.ilqr.ILQRResult`'s ``us``): the exact Hessian of the
+    (N, m) (e.g. an :class:`mutual.motion.trajopt.ILQRResult`'s ``us``): the exact Hessian of the
     single-shooting cost by autodiff. Returns ``(mean (N, m), precision)``; raises ValueError when
     the Hessian is not positive definite (``u*`` is not a strict local minimum)."""
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us_opt, params)
@@ -101,73 +102,9 @@ def laplace_gaussian(dynamics, running_cost, terminal_cost, x0, us_opt, params=N
     return us, _precision("the Hessian of the cost at us_opt", H, H.shape[0])
 
 
-def _trailing_logdets(H):
+def trailing_logdets(H):
     """``log det H[j:, j:]`` for ``j = 0..d`` (d+1,), 0 for the empty block: the Cholesky factor of
     ``H`` with its variables in reverse order has the trailing blocks as leading blocks."""
     L = np.linalg.cholesky(H[::-1, ::-1])
     lead = np.concatenate([[0.0], np.cumsum(2 * np.log(np.diag(L)))])  # log det of the leading k x k
     return lead[::-1]
-
-
-def continuation_loglik(task, weights, us, optimum, times=None):
-    """``log P(u_{0:t} | H)`` (len(times),) for a hypothesis with feature ``weights`` on ``task``,
-    by the Laplace approximation around the *optimal continuation* of the motion so far::
-
-        log P(u_{0:t} | H) = -J_{0:t}(u) - V_t(x_t) + J* + 1/2 [log det Hess - log det Hess_{t:,t:}]
-                             - (t m / 2) log(2 pi)
-
-    ``J_{0:t}``: the cost of the controls seen so far (exact); ``V_t(x_t)``: the optimal cost-to-go
-    from the state they reached (iLQR on the remaining horizon, all ``t`` solved at once,
-    :mod:`mutual.motion.mpc`'s frozen stages); ``J* = V_0(x_0)``: the hypothesis's optimal cost;
-    ``Hess``: the Hessian of ``H_J`` in the controls at the optimum ``optimum`` (an ILQRResult),
-    whose Schur complement onto the first ``t`` steps measures the volume of near-optimal
-    continuations. For linear dynamics and quadratic costs every term is exact (the integral of
-    the Gaussian over the unseen controls), so this equals the Gaussian marginal of
-    :func:`gaussian_prefix_loglik`; it is Dragan and Srinivasa's ``exp(-C(xi_{S->Q}) - V(Q)) /
-    exp(-V(S))`` with that volume correction. Raises ValueError if a continuation does not converge.
-    """
-    us = np.asarray(us, float)
-    N, m = task.steps, task.controls
-    if us.shape != (N, m) or not np.all(np.isfinite(us)):
-        raise ValueError(f"us must be finite controls of shape {(N, m)}, got {us.shape}")
-    times = np.arange(N + 1) if times is None else np.asarray(times)
-    if times.ndim != 1 or times.size == 0 or not np.issubdtype(times.dtype, np.integer) \
-            or times.min() < 0 or times.max() > N:
-        raise ValueError(f"times must be integers in [0, {N}], got {times!r}")
-    dyn, run, term, x0, params = es.problem(task, weights)
-    _, H = laplace_gaussian(dyn, run, term, x0, optimum.us, params)
-    logdet = _trailing_logdets(H)
-    xs = es.rollout(task, us)
-    with jax.enable_x64(True):
-        stage = np.asarray(jax.vmap(run, in_axes=(0, 0, None))(jnp.asarray(xs[:-1]), jnp.asarray(us), params))
-    prefix = np.concatenate([[0.0], np.cumsum(stage)])
-    # V_0(x_0) by the same search as every V_t, so that nothing seen gives log-likelihood 0
-    to_go = continuation_costs(task, weights, xs[np.r_[0, times]], np.r_[0, times], (optimum.us, us))
-    full = logdet[0] - logdet[times * m]
-    return -prefix[times] - to_go[1:] + to_go[0] + 0.5 * full - 0.5 * times * m * np.log(2 * np.pi)
-
-
-def belief_over_time(task, w0, w1, us, optima, prior=0.5, times=None):
-    """``P(H1 | u_{0:t})`` for ``t`` in ``times`` (default ``0..N``) of controls ``us`` on ``task``,
-    with each hypothesis's likelihood from :func:`continuation_loglik` around its optimum
-    ``optima = {"H0": result, "H1": result}`` (exact for ``x' = u``)."""
-    if isinstance(prior, (bool, np.bool_)) or not isinstance(prior, (int, float, np.integer, np.floating)) \
-            or not 0 < prior < 1:
-        raise ValueError(f"prior must be a probability strictly between 0 and 1, got {prior!r}")
-    if task.x0.shape == (2,) and np.asarray(w0)[3] == 0 and np.asarray(w1)[3] == 0 and np.asarray(w0)[2] == 0:
-        # x' = u with quadratic features: the exact Gaussians of chapter 6 (numpy, no solves)
-        costs = es.lq_hypothesis_costs(task, w0, w1)
-        gaussians = [lq_gaussian(single_integrator(2, task.dt), costs[k], task.x0, task.steps) for k in ("H0", "H1")]
-        b = posterior_over_time(us, *gaussians, prior=prior)
-        return b if times is None else b[np.asarray(times)]
-    log0 = continuation_loglik(task, w0, us, optima["H0"], times)
-    log1 = continuation_loglik(task, w1, us, optima["H1"], times)
-    return 0.5 * (1 + np.tanh(0.5 * (log1 - log0 + np.log(prior / (1 - prior)))))
-
-
-def task_gaussians(task, w0, w1, optima):
-    """``(P(u|H0), P(u|H1))`` as Gaussians ``(mean, precision)`` for a task, Laplace-approximated
-    around the hypotheses' optima ``optima = {"H0": result, "H1": result}`` (the *global*
-    Laplace approximation; exact for ``x' = u``, whose feature costs are quadratic)."""
-    return tuple(laplace_gaussian(*es.problem(task, w)[:4], optima[name].us, es.problem(task, w)[4])
-                 for name, w in (("H0", w0), ("H1", w1)))

@@ -6,14 +6,14 @@ The hypotheses are reaching tasks, eq. (6.17) discretised with ``N = steps`` ste
 goal (H1) and ``g_0`` each distractor (H0). The legible motion minimises
 ``(1 + alpha) J_1 - J_0`` (eq. 6.15; Theorem 6.4.2 makes it the minimiser of the likelihood
 ratio); with several distractors ``J_0`` is their mean, the equal-weight case of the Lagrangian
-of section 6.5 (:func:`mutual.motion.legibility.distractor_mixture`). Alternatives: ``eta``
+of section 6.5 (:func:`mutual.motion.legible.objective.distractor_mixture`). Alternatives: ``eta``
 solves the multi-distractor QP of section 6.5, ``min J_1 s.t. J_1 - J_0i <= eta``
-(:func:`mutual.motion.qp.multi_distractor_qp`), and an ``[anticipation]`` table replans with
+(:func:`mutual.motion.legible.qp.multi_distractor_qp`), and an ``[anticipation]`` table replans with
 ``alpha`` rising linearly over the horizon (eq. 6.16).
 
 ``dynamics = "single-integrator"`` (``x' = u`` in the plane, eq. 6.5) is solved exactly by LQR;
 ``"dubins"`` (the car of eq. 7.5, state ``(x, y, theta)``, constant speed, turn rate ``u``) by
-iLQR (:func:`mutual.motion.ilqr.ilqr`) from several constant-turn starts, keeping the best.
+iLQR (:func:`mutual.motion.trajopt.ilqr`) from several constant-turn starts, keeping the best.
 
 The spec (every key; see ``data/README.md``)::
 
@@ -173,7 +173,7 @@ def load_legible_spec(path):
 # ---- solving ---------------------------------------------------------------------------------------
 
 def _costs(spec):
-    from .legibility import reaching_cost
+    from .legible.problem import reaching_cost
     J1 = reaching_cost(spec.goal, spec.dt, spec.terminal_weight, spec.effort_weight)
     J0s = [reaching_cost(g, spec.dt, spec.terminal_weight, spec.effort_weight) for g in spec.distractors]
     return J1, J0s
@@ -192,9 +192,9 @@ def solve_legible(spec):
         raise ValueError("spec must be a LegibleSpec (use legible_spec or load_legible_spec)")
     if spec.dynamics == "dubins":
         return _solve_dubins(spec)
-    from . import legibility as leg
+    from . import legible as leg
     from .observer import log_likelihood_ratio
-    from .qp import multi_distractor_qp
+    from .legible.qp import multi_distractor_qp
     dyn = leg.single_integrator(2, spec.dt)
     x0, N = np.array(spec.start), spec.steps
     J1, J0s = _costs(spec)
@@ -220,7 +220,7 @@ def solve_legible(spec):
 
 
 def _dubins_step(x, u, params):
-    from .evident_safety import dubins_step
+    from .evident.vehicles import dubins_step
     return dubins_step(x, u, params["dt"], params["speed"])
 
 
@@ -243,7 +243,7 @@ def _dubins_params(spec, w1, w0, effort):
 
 
 def _best_ilqr(spec, params):
-    from .ilqr import ILQRError, ilqr
+    from .trajopt import ILQRError, ilqr
     found, errors = [], []
     for rate in DUBINS_STARTS:
         try:

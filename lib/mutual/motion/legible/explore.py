@@ -17,10 +17,10 @@ built without pyplot; the notebook's Explore cell wraps it in ``ipywidgets.inter
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..style import CYCLE, PALETTE, STYLE
-from .legibility import legible_trajectory, linear_alpha_schedule, reaching_cost, receding_horizon
-from .legibility import single_integrator, solve
-from .observer import posterior_over_time
+from ...style import CYCLE, PALETTE, STYLE
+from ..observer import posterior_over_time
+from .objective import legible_trajectory, linear_alpha_schedule, receding_horizon
+from .problem import reaching_cost, single_integrator, solve
 from .qp import multi_distractor_qp, receding_horizon_qp
 
 DT, N = 0.01, 100

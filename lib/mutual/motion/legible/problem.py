@@ -1,26 +1,18 @@
-"""Legible motion as hypothesis testing for linear-quadratic hypotheses (chapter 6).
+"""Linear-quadratic hypotheses for chapter 6: linear dynamics ``x_{k+1} = A x_k + B u_k`` and quadratic
+costs (eq. (6.3)), with the reaching cost of eq. (6.17) and the exact minimiser by the Riccati
+recursion (:func:`mutual.motion.legible.lqr.solve_lq`).
 
-An observer decides between hypotheses ``H_i``, each an optimal-control problem
-with cost ``J_i`` (eq. (6.3)); it models the robot's controls as Boltzmann
-distributed, ``P(u | H_i) = exp(-J_i(u)) / Z_i`` (eq. (6.8)). By Theorem 6.4.2
-the likelihood ratio ``Lambda = P(u|H0) / P(u|H1)`` (eq. (6.7)) has the same
-minimisers as ``J1 - J0`` (eq. (6.13)); weighting the task, ``(1 + alpha) J1 - J0``
-(eq. (6.15)). For linear dynamics and quadratic costs this is one LQ problem,
-solved exactly by :func:`mutual.motion.lqr.solve_lq`.
-
-Costs use the convention of :mod:`mutual.motion.lqr`: stage cost ``1/2 x'Qx + q'x +
-1/2 u'Ru + r'u``, terminal ``1/2 x'Q_N x + q_N'x``, plus a constant, so that
-costs add and scale (``1.5 * J1 - J0``) exactly as hypotheses do in eq. (6.15).
-With quadratic costs and linear dynamics ``P(u | H_i)`` is Gaussian in the
-stacked controls, so ``Z_i`` and ``Lambda`` have closed forms (:mod:`.observer`); several
-distractors at once are the QP of :mod:`.qp`.
+Costs use the convention of :mod:`.lqr`: stage cost ``1/2 x'Qx + q'x + 1/2 u'Ru + r'u``, terminal
+``1/2 x'Q_N x + q_N'x``, plus a constant, so that costs add and scale (``1.5 * J1 - J0``) exactly as
+hypotheses do in eq. (6.15). With quadratic costs and linear dynamics ``P(u | H_i)`` is Gaussian
+in the stacked controls, so ``Z_i`` and ``Lambda`` have closed forms (:mod:`mutual.motion.observer`).
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from .lqr import riccati_backward, solve_lq, symmetric
+from .lqr import solve_lq, symmetric
 
 
 @dataclass(frozen=True)
@@ -225,58 +217,20 @@ def reaching_cost(goal, dt=0.01, terminal_weight=1.0, effort_weight=1.0, m=None)
                          const=terminal_weight * g @ g)
 
 
-def distractor_mixture(J0, weights=None):
-    """``sum_i w_i J0_i`` for a list of distractor costs (default equal weights summing to one);
-    a single QuadraticCost is returned as it is. The Lagrangian of the multi-distractor problem
-    of section 6.5 weighs the distractors this way (its multipliers are the weights)."""
-    if isinstance(J0, QuadraticCost):
-        if weights is not None:
-            raise ValueError("weights are only for a list of distractors J0")
-        return J0
-    costs = list(J0)
-    if not costs or not all(isinstance(J, QuadraticCost) for J in costs):
-        raise ValueError("J0 must be a QuadraticCost or a non-empty list of QuadraticCosts")
-    w = np.full(len(costs), 1.0 / len(costs)) if weights is None else np.asarray(weights, float)
-    if w.shape != (len(costs),) or not np.all(np.isfinite(w)) or np.any(w < 0) or not w.sum() > 0:
-        raise ValueError(f"weights must be {len(costs)} finite non-negative numbers, not all zero, got {weights!r}")
-    total = w[0] * costs[0]
-    for wi, J in zip(w[1:], costs[1:]):
-        total = total + wi * J
-    return total
-
-
-def legible_cost(J1, J0, alpha, weights=None):
-    """The legibility objective ``(1 + alpha) J1 - J0`` (eqs. (6.13), (6.15)); ``J0`` may be a list of
-    distractors, combined by :func:`distractor_mixture` (``weights``, default equal). ``J1`` and ``J0``
-    may be anything that adds and scales (QuadraticCosts, or chapter 7's feature-weight vectors)."""
-    if isinstance(alpha, (str, bytes, bool)) or np.ndim(alpha) != 0:
-        raise ValueError(f"alpha must be a finite number, got {alpha!r}")
-    try:
-        finite = bool(np.isfinite(alpha))
-    except Exception:           # a traced (JAX) value: checked where it is concrete
-        finite = True
-    if not finite:
-        raise ValueError(f"alpha must be a finite number, got {alpha!r}")
-    if isinstance(J0, (list, tuple)):
-        J0 = distractor_mixture(J0, weights)
-    elif weights is not None:
-        raise ValueError("weights are only for a list of distractors J0")
-    return (1.0 + alpha) * J1 - J0
-
-
 def solve(dynamics, cost, x0, N, backend="numpy"):
     """Exact minimiser of ``cost`` under ``dynamics`` from ``x0`` over ``N`` steps (an LQSolution).
 
-    ``backend``: ``"numpy"`` or ``"jax"`` (compiled, :mod:`mutual.motion.lqr_compiled`).
+    ``backend``: ``"numpy"`` or ``"jax"`` (compiled, :mod:`.lqr_compiled`).
     Raises ValueError if the problem is unbounded (e.g. ``alpha <= 0`` for x' = u).
     """
-    _check_problem(dynamics, cost, N)
+    check_lq_problem(dynamics, cost, N)
     dyn = dynamics.stages(0, N)
     c = cost.stages(0, N)
     return solve_lq(dyn.A, dyn.B, c.Q, c.R, x0, N, q=c.q, r=c.r, QN=c.QN, qN=c.qN, backend=backend)
 
 
-def _check_problem(dynamics, cost, N):
+def check_lq_problem(dynamics, cost, N):
+    """Refuse dynamics, a cost or a horizon that do not make one LQ problem, naming the argument."""
     if not isinstance(dynamics, LinearDynamics):
         raise ValueError(f"dynamics must be a LinearDynamics, got {type(dynamics).__name__}")
     if not isinstance(cost, QuadraticCost):
@@ -290,96 +244,6 @@ def _check_problem(dynamics, cost, N):
         a = getattr(cost, f)
         if cost._per_stage(f) and len(a) < N:
             raise ValueError(f"cost field {f} has {len(a)} stages; N = {N} were asked for")
-
-
-def legible_trajectory(dynamics, J1, J0, x0, N, alpha, weights=None, backend="numpy"):
-    """Minimiser of ``(1 + alpha) J1 - J0`` (eq. (6.15)); an LQSolution. ``J0`` may be a list of
-    distractors (combined with ``weights``, default equal: the Lagrangian form of section 6.5)."""
-    return solve(dynamics, legible_cost(J1, J0, alpha, weights), x0, N, backend=backend)
-
-
-def linear_alpha_schedule(alpha_start, alpha_end):
-    """An increasing ``alpha(s)`` for eq. (6.16), ``s = t / T`` in [0, 1]:
-    ``alpha(s) = alpha_start + (alpha_end - alpha_start) s``.
-
-    Low ``alpha`` early puts the weight on being informative, high ``alpha`` late
-    on the task (section 6.5); ``0 < alpha_start <= alpha_end`` is required.
-    """
-    if not (0 < alpha_start <= alpha_end and np.isfinite(alpha_end)):
-        raise ValueError(f"need 0 < alpha_start <= alpha_end < inf, got {alpha_start!r}, {alpha_end!r}")
-    return lambda s: alpha_start + (alpha_end - alpha_start) * s
-
-
-def geometric_alpha_schedule(alpha_start, alpha_end):
-    """An increasing ``alpha(s) = alpha_start (alpha_end / alpha_start)^s`` for eq. (6.16), ``s = t / T``:
-    equal ratios of task to communication weight in equal times."""
-    if not (0 < alpha_start <= alpha_end and np.isfinite(alpha_end)):
-        raise ValueError(f"need 0 < alpha_start <= alpha_end < inf, got {alpha_start!r}, {alpha_end!r}")
-    return lambda s: alpha_start * (alpha_end / alpha_start) ** s
-
-
-def replan_gains(dynamics, J1, J0, N, w1, w0, starts):
-    """Feedback gains of the replans ``min w1[p] J1 - w0[p] J0`` on ``[starts[p], N)`` (eq. (6.16)),
-    all from one batched backward sweep (:func:`mutual.motion.lqr.riccati_backward`): returns
-    ``K`` (P, N, m, n) and ``k`` (P, N, m); replan ``p``'s control at step ``t >= starts[p]`` is
-    ``K[p, t] x_t + k[p, t]``."""
-    dyn, c1, c0 = dynamics.stages(0, N), J1.stages(0, N), J0.stages(0, N)
-    n, m = dyn.n, dyn.m
-    w1, w0 = np.asarray(w1, float), np.asarray(w0, float)
-
-    def mix(f, shape):          # per replan: w1 J1 - w0 J0, field f
-        one = np.broadcast_to(getattr(c1, f), shape)
-        zero = np.broadcast_to(getattr(c0, f), shape)
-        lead = (-1, *([1] * len(shape)))
-        return w1.reshape(lead) * one - w0.reshape(lead) * zero
-
-    A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
-    K, k, _, _ = riccati_backward(A, B, mix("Q", (N, n, n)), mix("R", (N, m, m)), mix("q", (N, n)),
-                                  mix("r", (N, m)), mix("QN", (n, n)), mix("qN", (n,)), starts=starts)
-    return K, k
-
-
-def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
-    """Anticipative legible control by receding horizon (eq. (6.16)).
-
-    Replans at steps ``t_i = 0, every, 2 every, ...`` on the remaining horizon
-    ``[t_i, N)`` with ``alpha_i = alpha_of_s(t_i / N)`` and follows each plan until the
-    next replanning. The replans' backward Riccati passes share the dynamics and
-    differ only in ``alpha``, so they run together in one batched sweep
-    (:func:`mutual.motion.lqr.riccati_backward`); the closed loop then applies plan ``i``'s
-    feedback on its own steps, which reproduces its open-loop controls exactly.
-    Returns ``(xs, us, alphas)`` with ``alphas[k]`` the weight in force at step ``k``.
-    ``J0`` may be a list of distractors (combined with equal weights, :func:`distractor_mixture`).
-    """
-    if not isinstance(every, (int, np.integer)) or every < 1:
-        raise ValueError(f"every must be a positive integer, got {every!r}")
-    if not isinstance(N, (int, np.integer)) or N < 1:
-        raise ValueError(f"N must be a positive integer, got {N!r}")
-    if not callable(alpha_of_s):
-        raise ValueError(f"alpha_of_s must be a function of s = t / N in [0, 1], got {alpha_of_s!r}")
-    J0 = distractor_mixture(J0)
-    _check_problem(dynamics, J1, N)
-    _check_problem(dynamics, J0, N)
-    x0 = np.asarray(x0, float)
-    if x0.shape != (dynamics.n,) or not np.all(np.isfinite(x0)):
-        raise ValueError(f"x0 must be a finite vector of length {dynamics.n}, got {x0!r}")
-    starts = np.arange(0, N, every)
-    alphas = np.array([float(alpha_of_s(t / N)) for t in starts])
-    if not np.all(np.isfinite(alphas)):
-        raise ValueError(f"alpha_of_s returned non-finite weights {alphas.tolist()}")
-    K, k = replan_gains(dynamics, J1, J0, N, 1.0 + alphas, np.ones_like(alphas), starts)
-    dyn = dynamics.stages(0, N)
-    n, m = dyn.n, dyn.m
-    A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
-    plan = np.arange(N) // every            # which replan is in force at each step
-    Ks, ks = K[plan, np.arange(N)], k[plan, np.arange(N)]
-    xs = np.empty((N + 1, n))
-    us = np.empty((N, m))
-    x = xs[0] = np.asarray(x0, float)
-    for t in range(N):
-        u = us[t] = Ks[t] @ x + ks[t]
-        x = xs[t + 1] = A[t] @ x + B[t] @ u
-    return xs, us, alphas[plan]
 
 
 def random_lq_hypotheses(rng, n=2, m=2, N=10):

@@ -11,8 +11,8 @@ several motion sets and reports each, that one included.
 import numpy as np
 import pandas as pd
 
-from .legibility import legible_trajectory
-from .observer import batch_costs, sample_boltzmann
+from ..observer import batch_costs, sample_boltzmann
+from .objective import legible_trajectory
 
 MOTION_SETS = ("samples from P(u|H0)", "mixture of P(u|H0) and P(u|H1)", "straight lines to random end points",
                "optima of (1+alpha) J1 - J0 over alpha", "samples from P(u|H1) (zero by construction)")

@@ -17,8 +17,8 @@ remaining-horizon optimum.
 import jax.numpy as jnp
 import numpy as np
 
-from . import evident_safety as es
-from .ilqr import ILQRError, ilqr
+from ..trajopt import ILQRError, ilqr
+from . import safety as es
 
 
 def _frozen_step(z, u, params):
@@ -40,7 +40,7 @@ def receding_horizon_ilqr(task, w0, w1, alpha_of_s, every=1, **ilqr_options):
     """Anticipative legible control by receding horizon (eq. (6.16)) with iLQR on ``task``'s dynamics.
 
     ``alpha_of_s(s)`` gives the weight for a replanning at ``s = t_i / N`` (e.g.
-    :func:`mutual.motion.legibility.linear_alpha_schedule`). Each replanning is warm-started from
+    :func:`mutual.motion.legible.objective.linear_alpha_schedule`). Each replanning is warm-started from
     the previous plan. Returns ``{"xs": (N+1, n), "us": (N, m), "alphas": (N,), "replans": int,
     "iterations": list}`` where ``alphas[k]`` is the weight in force at step ``k``.
     """

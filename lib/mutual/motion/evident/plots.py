@@ -1,6 +1,6 @@
 """Static figures of chapter 7 and Figure 6.1: the planar paths of H0, H1 and the legible optimum."""
 
-from ..style import PALETTE
+from ...style import PALETTE
 
 STYLE = {"H0": (PALETTE["black"], "H0 (ignorant)"), "H1": ("#8c8c8c", "H1 (avoidant)"),
          "legible": (PALETTE["green"], "legible: min (1+\u03b1) J1 - J0")}

@@ -15,7 +15,7 @@ import numpy as np
 class MultiStart:
     """Runs of one problem from several starts.
 
-    ``runs`` the :class:`mutual.motion.ilqr.ILQRResult` of each start (None where it failed),
+    ``runs`` the :class:`mutual.motion.trajopt.ILQRResult` of each start (None where it failed),
     ``labels`` a description of each start, ``rtol`` the relative tolerance (of the objective's
     magnitude) under which two costs count as the same minimum. Unpacks as ``(best, converged)``.
     """

@@ -7,7 +7,7 @@ The problem, with ``x_0`` given and the horizon ``N`` set by the control sequenc
 
 The three callables are written with ``jax.numpy``; their derivatives come from JAX autodiff
 (exact, no finite differences). The whole solve is one jit-compiled ``jax.lax.while_loop`` per
-set of callables (:mod:`mutual.motion.ilqr_core`; ``params`` is traced, so a family of
+set of callables (:mod:`.compiled`; ``params`` is traced, so a family of
 problems shares one compilation), and :func:`ilqr_batch` solves many problems at once under
 ``jax.vmap``. All arithmetic is float64.
 
@@ -19,7 +19,7 @@ minimum), runs the Riccati-like backward pass for an affine policy
 be convex, e.g. the legible ``(1 + alpha) J1 - J0`` of eq. (6.15): the control block ``Q_uu`` is
 regularised to ``Q_uu + mu c I`` whenever it is not positive definite.
 
-Convergence and divergence tests are scale-free (see :mod:`mutual.motion.ilqr_core`): they do
+Convergence and divergence tests are scale-free (see :mod:`.iteration`): they do
 not change when the objective is multiplied by a constant (1e-6 or 1e6) and do not mistake a far
 start for a solution. A run that diverges, an objective unbounded below, or a stationary point
 that is not a minimum raises :class:`ILQRError` with the reason.
@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import jax
 import numpy as np
 
-from .ilqr_core import CONVERGED, DIVERGED, INDEFINITE, NO_DECREASE, NONFINITE_START, SUMMARY, kernels
-from .problem_checks import check_batch, check_problem, x64
-from .single_shooting import solve_lbfgs_jit, solve_single_shooting  # noqa: F401 (re-exported baselines)
+from .checks import check_batch, check_problem, x64
+from .compiled import kernels
+from .iteration import CONVERGED, DIVERGED, INDEFINITE, NO_DECREASE, NONFINITE_START, SUMMARY
 
 
 SADDLE_ESCAPES = 3  # restarts from a saddle along its most negative curvature before reporting it
@@ -205,7 +205,7 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     return an :class:`ILQRResult`.
 
     ``params`` (any pytree) is passed to the three callables. Converged (all tests scale-free,
-    :mod:`mutual.motion.ilqr_core`) when the model's predicted decrease ``1/2 g'H^-1 g`` is at most
+    :mod:`.iteration`) when the model's predicted decrease ``1/2 g'H^-1 g`` is at most
     ``grad_tol**2`` times the objective's magnitude ``M`` (sum of absolute stage costs), or when an
     accepted step lowered the cost by at most ``stall_tol M`` and moved no control by more than
     ``step_tol`` times the largest control, or when only rounding is left; the point must then be
@@ -217,7 +217,7 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     A stationary point that is not a minimum is left along the exact Hessian's most negative
     curvature and the solve goes on, at most ``SADDLE_ESCAPES`` times, before it is reported.
     ``second_order``: False for Gauss-Newton iLQR, True for full DDP, ``"auto"`` (default)
-    Gauss-Newton far from the minimum and DDP close to it (:mod:`mutual.motion.ilqr_core`).
+    Gauss-Newton far from the minimum and DDP close to it (:mod:`.iteration`).
     ``target``: also stop at the first accepted step whose cost is at most ``target`` (NLopt's
     ``stopval``; e.g. a known optimum plus a tolerance, to time solvers to equal cost).
     """

@@ -24,7 +24,7 @@ the quadratic form can pass ``(R + R')/2``. Asymmetry at rounding level (relativ
 is removed silently.
 
 ``backend="numpy"`` (default) is the reference recursion; ``backend="jax"`` the compiled
-one of :mod:`mutual.motion.lqr_compiled` (same answer to rounding, tens of times faster
+one of :mod:`mutual.motion.legible.lqr_compiled` (same answer to rounding, tens of times faster
 for long horizons after a compile of about a second per size).
 """
 

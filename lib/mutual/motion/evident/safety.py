@@ -3,7 +3,7 @@ kinematic bicycle.
 
 Every hypothesis cost of chapter 7 is a weighted sum of four features of a trajectory,
 discretised with ``N`` steps of ``dt = T / N`` (left Riemann sums, as
-:mod:`mutual.motion.legibility` does)::
+:mod:`mutual.motion.legible` does)::
 
     J(u; w) = w_goal   |P x_N - g|^2                                  (eqs. 7.1, 7.3)
             + w_effort dt sum_k |u_k|^2                                (eqs. 7.1, 7.3)
@@ -14,11 +14,11 @@ discretised with ``N`` steps of ``dt = T / N`` (left Riemann sums, as
 keep-out states (a person in Fig. 6.1, or a constraint inferred in chapters 2-3), so a robot can
 evidence that it respects a learned constraint. Costs are linear in the weights, so the legible
 objective ``(1 + alpha) J1 - J0`` of eq. (6.15) is the same feature cost with weights
-``(1 + alpha) w1 - w0`` (:func:`mutual.motion.legibility.legible_cost`): H0, H1 and the legible
-problem share one compiled iLQR (:mod:`mutual.motion.ilqr`), and many of them are solved at once
+``(1 + alpha) w1 - w0`` (:func:`mutual.motion.legible.objective.legible_cost`): H0, H1 and the legible
+problem share one compiled iLQR (:mod:`mutual.motion.trajopt`), and many of them are solved at once
 by :func:`solve_batch` (multi-start, alpha sweeps).
 
-Dynamics (:mod:`mutual.motion.bicycle`), chosen by the length of the state: ``x' = u`` in the
+Dynamics (:mod:`mutual.motion.evident.vehicles`), chosen by the length of the state: ``x' = u`` in the
 plane (2, Fig. 7.1), the Dubins car of eq. (7.5) (3, Fig. 7.2), the kinematic bicycle
 (4, Fig. 6.1).
 """
@@ -29,13 +29,12 @@ import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 
-from .bicycle import SPEED, WHEELBASE, bicycle_step, dubins_step, single_integrator_step  # noqa: F401
-from .evidence import distance_table, distance_to_point  # noqa: F401 (re-exported, stable API)
-from .evident_plots import plot_paths  # noqa: F401 (re-exported, stable API)
-from .ilqr import ilqr, ilqr_batch, solve_single_shooting, trajectory_cost, trajectory_cost_grad
-from .ilqr import rollout as _rollout
-from .legibility import QuadraticCost, legible_cost, reaching_cost
-from .multistart import MultiStart
+from ..legible.objective import legible_cost
+from ..legible.problem import QuadraticCost, reaching_cost
+from ..trajopt import MultiStart, ilqr, ilqr_batch, solve_single_shooting, trajectory_cost, trajectory_cost_grad
+from ..trajopt import rollout as _rollout
+from .evidence import distance_to_point
+from .vehicles import SPEED, WHEELBASE, bicycle_step, dubins_step, single_integrator_step
 
 FEATURES = ("goal", "effort", "hazard", "keep_out")
 
@@ -172,7 +171,7 @@ def legible_weights(w1, w0, alpha):
 
 
 def problem(task, weights):
-    """``(dynamics, running_cost, terminal_cost, x0, params)`` for :mod:`mutual.motion.ilqr`'s functions."""
+    """``(dynamics, running_cost, terminal_cost, x0, params)`` for :mod:`mutual.motion.trajopt`'s functions."""
     return _step, _running, _terminal, task.x0, task.params(weights)
 
 
@@ -191,7 +190,7 @@ def literal_legible_problem(task, w0, w1, alpha):
     """The legible objective ``(1 + alpha) J1 - J0`` as the corollary's proof states it: every query
     evaluates both hypotheses' costs and combines them (instead of merging their weights);
     ``(dynamics, running_cost, terminal_cost, x0, params)``, e.g. for
-    :func:`mutual.motion.ilqr.iteration_flops`."""
+    :func:`mutual.motion.trajopt.iteration_flops`."""
     params = {**task.params(w1), "w0": np.asarray(w0, float), "w1": np.asarray(w1, float),
               "alpha": np.float64(alpha)}
     return _step, _literal_running, _literal_terminal, task.x0, params
@@ -205,11 +204,11 @@ def solve(task, weights, us0=None, **ilqr_options):
 
 
 def solve_batch(tasks, weights, us0=None, **ilqr_options):
-    """Solve many feature-cost problems at once (:func:`mutual.motion.ilqr.ilqr_batch`).
+    """Solve many feature-cost problems at once (:func:`mutual.motion.trajopt.ilqr_batch`).
 
     ``tasks`` one task or a sequence of B tasks of the same dynamics and ``steps`` (e.g. other
     start states, goals or hazards); ``weights`` (4,) or (B, 4) (e.g. an alpha sweep); ``us0``
-    None (zero controls), (N, m) or (B, N, m). Returns an :class:`mutual.motion.ilqr.ILQRBatch`.
+    None (zero controls), (N, m) or (B, N, m). Returns an :class:`mutual.motion.trajopt.ILQRBatch`.
     """
     tasks = [tasks] if isinstance(tasks, EvidentSafetyTask) else list(tasks)
     if not tasks or not all(isinstance(t, EvidentSafetyTask) for t in tasks):
@@ -311,8 +310,8 @@ def relative_gradient(task, weights, result):
 
 
 def lq_hypothesis_costs(task, w0, w1, alpha=LEGIBLE_ALPHA):
-    """Fig. 7.1's objectives as chapter 6's :class:`mutual.motion.legibility.QuadraticCost` (x' = u, no keep-out),
-    for the exact Riccati solution by :func:`mutual.motion.legibility.solve`."""
+    """Fig. 7.1's objectives as chapter 6's :class:`mutual.motion.legible.problem.QuadraticCost` (x' = u, no keep-out),
+    for the exact Riccati solution by :func:`mutual.motion.legible.problem.solve`."""
     if task.x0.shape != (2,) or np.any(np.asarray(w0)[2:] != 0) or np.asarray(w1)[3] != 0:
         raise ValueError("lq_hypothesis_costs needs x' = u, H0 without hazard and no keep-out weight")
     if np.any(np.asarray(w1)[:2] != np.asarray(w0)[:2]):
@@ -348,7 +347,7 @@ def best_of_starts(task, weights, turn_rates=(0.0, 0.5, -0.5, 1.0, -1.0, 2.0, -2
     """The lowest-cost local optimum over iLQR runs from constant controls ``turn_rates`` (all starts of one
     ``second_order`` setting solved at once by :func:`solve_batch`), with a flag for disagreeing runs.
 
-    A check against poor local optima. Returns a :class:`mutual.motion.multistart.MultiStart`,
+    A check against poor local optima. Returns a :class:`mutual.motion.trajopt.multistart.MultiStart`,
     which unpacks as ``(best ILQRResult, number of runs that converged)``; its ``local_minima``
     is True when converged runs ended at costs that differ by more than ``rtol`` times the
     objective's magnitude (distinct local minima). Raises ValueError when no run converges.

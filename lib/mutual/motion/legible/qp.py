@@ -6,7 +6,7 @@ Two formulations of the same problem:
 * ``"sparse"`` (default): states and controls are both variables and the dynamics are
   equality constraints, so the solver's KKT matrix is banded and its cost grows linearly
   with the horizon ``N``;
-* ``"dense"``: the dynamics are eliminated (the lifted form of :mod:`.observer`), so the
+* ``"dense"``: the dynamics are eliminated (the lifted form of :mod:`mutual.motion.observer`), so the
   variables are the ``N m`` stacked controls and the cost grows like ``N^2`` to ``N^3``.
   It stays for cross-checks and for hypotheses whose ``J1 - J0_i`` is convex in the controls
   but not stage by stage (then the sparse form would not be a convex program as written).
@@ -16,7 +16,7 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from .observer import lifted_cost, lifted_dynamics
+from ..observer import lifted_cost, lifted_dynamics
 
 
 def _check(dynamics, J1, distractors, x0, N, etas):

@@ -12,8 +12,8 @@ import time
 import numpy as np
 import pandas as pd
 
-from .legibility import legible_trajectory, linear_alpha_schedule, reaching_cost, receding_horizon, single_integrator
-from .legibility import solve
+from .objective import legible_trajectory, linear_alpha_schedule, receding_horizon
+from .problem import reaching_cost, single_integrator, solve
 
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])
 
@@ -84,7 +84,7 @@ def replan_seconds(N=100, repeats=20, backend="jax", alpha=1.0):
 
 def receding_horizon_seconds(N=100, repeats=5, schedule=(0.25, 4.0)):
     """Time of a whole receding-horizon run replanning at every step (N replans, batched backward
-    sweep, :func:`mutual.motion.legibility.receding_horizon`) on the reference problem."""
+    sweep, :func:`mutual.motion.legible.objective.receding_horizon`) on the reference problem."""
     dyn, J1, J0 = _reference(N)
     alpha = linear_alpha_schedule(*schedule)
     return interleaved_best_times({"rh": lambda: receding_horizon(dyn, J1, J0, np.zeros(2), N, alpha)}, repeats)["rh"]

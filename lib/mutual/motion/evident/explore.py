@@ -12,11 +12,11 @@ from functools import lru_cache
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..style import PALETTE
-from . import belief
-from . import evident_safety as es
-from .evident_plots import STYLE, plot_paths
-from .ilqr import ILQRError
+from ...style import PALETTE
+from ..trajopt import ILQRError
+from . import safety as es
+from .plots import STYLE, plot_paths
+from .task_belief import belief_over_time
 
 BELIEF_POINTS = 9  # instants at which the belief is computed in the live view
 
@@ -37,7 +37,7 @@ def _solve(alpha, hazard, steps):
         times = np.unique(np.linspace(0, steps, BELIEF_POINTS).round().astype(int))
         for name, r in results.items():
             try:
-                beliefs[name] = (times, belief.belief_over_time(task, w0, w1, r.us, results, times=times))
+                beliefs[name] = (times, belief_over_time(task, w0, w1, r.us, results, times=times))
             except ValueError as err:
                 errors[f"belief of {name}"] = str(err)
     return task, results, beliefs, errors

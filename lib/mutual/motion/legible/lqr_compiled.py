@@ -1,4 +1,4 @@
-"""The finite-horizon Riccati recursion of :mod:`mutual.motion.lqr`, compiled (JAX, float64).
+"""The finite-horizon Riccati recursion of :mod:`mutual.motion.legible.lqr`, compiled (JAX, float64).
 
 Same problem, same answer (to rounding) as the reference NumPy recursion; used through
 ``solve_lq(..., backend="jax")``. What makes it fast on a CPU for the small matrices of
@@ -14,7 +14,7 @@ motion problems (n <= 12 states, m <= 6 controls):
   masked out, so replanning on shrinking horizons reuses one compiled function.
 
 Compiling costs about a second per (padded length, n, m, which arrays vary per stage);
-:func:`mutual.motion.lqr.solve_lq` reports unbounded problems from the Cholesky pivots
+:func:`mutual.motion.legible.lqr.solve_lq` reports unbounded problems from the Cholesky pivots
 (a pivot <= 1e-9 times the stage's scale), see its docstring.
 """
 
@@ -129,7 +129,7 @@ def _solve(arrays, QN, qN, x0, pad, per_stage):
 
 
 def riccati_compiled(stages, QN, qN, x0, N):
-    """Solve the LQ problem of :func:`mutual.motion.lqr.solve_lq` with the compiled recursion.
+    """Solve the LQ problem of :func:`mutual.motion.legible.lqr.solve_lq` with the compiled recursion.
 
     ``stages`` maps each of ``A, B, Q, R, q, r, M, c`` to its (N, ...) array (a broadcast view of
     a time-invariant array is passed once, not per stage). Returns NumPy arrays

@@ -2,7 +2,7 @@
 rollout of the controls, over the flattened controls with L-BFGS.
 
 Two drivers on the same jit-compiled objective and autodiff gradient as iLQR
-(:func:`mutual.motion.ilqr_core.kernels`): scipy's L-BFGS-B called from Python, and optax's
+(:func:`.compiled.kernels`): scipy's L-BFGS-B called from Python, and optax's
 L-BFGS (zoom line search) with the whole loop compiled into one ``jax.lax.while_loop``, which
 is what a practitioner who writes the problem in JAX would use.
 """
@@ -13,8 +13,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .ilqr_core import kernels
-from .problem_checks import check_problem, x64
+from .checks import check_problem, x64
+from .compiled import kernels
 
 
 @x64

@@ -18,10 +18,10 @@ Srinivasa's time-weighted evidence, and what Figure 6.2's "three times longer" d
 import numpy as np
 import pandas as pd
 
-from .legibility import (geometric_alpha_schedule, linear_alpha_schedule, reaching_cost, receding_horizon,
-                         replan_gains, single_integrator, solve)
+from ..observer import lifted_cost, lifted_dynamics, weighted_prefix_log_likelihood
+from .objective import geometric_alpha_schedule, linear_alpha_schedule, receding_horizon, replan_gains
 from .path_measures import time_to_reach
-from .observer import lifted_cost, lifted_dynamics, weighted_prefix_log_likelihood
+from .problem import reaching_cost, single_integrator, solve
 
 
 def ds_time_weights(N):
