@@ -16,7 +16,7 @@ import numbers
 import numpy as np
 
 from ..atomic import write_text
-from .claims import load_claims
+from .claims import check_scan, load_claims
 from .paths import results_dir, saved
 from .runs import run_record
 
@@ -37,6 +37,15 @@ def _plain(value):
     if isinstance(value, (list, tuple, np.ndarray)):
         return [_plain(v) for v in np.asarray(value).tolist()]
     raise ValueError(f"result value {value!r} is not a number, boolean, string or list")
+
+
+def _plain_scan(cid, scan):
+    """A claim's scan (:func:`mutual.compendium.claims.check_scan`) as JSON values."""
+    if not isinstance(scan, dict):
+        check_scan(cid, scan)
+    scan = {k: (_plain(v) if k in ("seeds", "settings") and v is not None else v) for k, v in scan.items()}
+    scan.setdefault("flips", "")
+    return check_scan(cid, scan)
 
 
 def import_dotted(dotted):
@@ -87,8 +96,9 @@ def write_results(notebook, claims, simulated=False):
 
     Each entry is a dict with ``value``, ``computed_by`` (the dotted name of the library function
     that computed the value, e.g. ``mutual.constraints.inference.greedy_inference``; the notebook
-    calls it), ``note`` (the computation: what was compared, on what) and optionally ``simulated``
-    (overriding the default for the whole notebook). ``notebook`` is the notebook's file stem.
+    calls it), ``note`` (the computation: what was compared, on what), optionally ``simulated``
+    (overriding the default for the whole notebook) and, for a ``computed`` claim, ``scan``: the
+    scan over what the thesis leaves open (:func:`mutual.compendium.claims.check_scan`). ``notebook`` is the notebook's file stem.
     Unknown claim ids and entries that do not name their computation raise a ValueError.
     """
     known = set(load_claims()["id"])
@@ -99,15 +109,17 @@ def write_results(notebook, claims, simulated=False):
         if not isinstance(entry, dict):
             raise ValueError(f"notebook {notebook}, claim {cid!r}: the entry must be a dict with 'value', "
                              f"'computed_by' and 'note', got {entry!r}")
-        unknown = set(entry) - {"value", "simulated", "note", "computed_by"}
+        unknown = set(entry) - {"value", "simulated", "note", "computed_by", "scan"}
         if unknown or "value" not in entry:
             raise ValueError(f"notebook {notebook}, claim {cid!r}: entry needs 'value', 'computed_by' and 'note' "
-                             f"and may carry 'simulated', got {sorted(entry)}")
+                             f"and may carry 'simulated' and 'scan', got {sorted(entry)}")
         _check_provenance(notebook, cid, entry)
         entries[cid] = {"value": _plain(entry["value"]),
                         "simulated": bool(entry.get("simulated", simulated)),
                         "note": str(entry["note"]),
                         "computed_by": str(entry["computed_by"])}
+        if entry.get("scan") is not None:
+            entries[cid]["scan"] = _plain_scan(cid, entry["scan"])
     doc = {"notebook": notebook, "run": run_record(notebook), "claims": entries}
     return saved(write_text(results_dir() / f"{notebook}.json", json.dumps(doc, indent=1, sort_keys=True) + "\n"))
 
