@@ -133,6 +133,7 @@ def entry(value, note="n = 50", by="mutual.study.stats.rm_anova", **more):
     ("c9-abs", 0.30, scan(), "reproduced"), ("c9-abs", 0.35, scan((0, 10), (0, 4)), "differs"),
     ("c9-abs", 0.30, scan((8, 10)), "undetermined"), ("c9-abs", 0.30, scan(settings=(3, 4)), "undetermined"),
     ("c9-abs", 0.35, scan((0, 10), (1, 4)), "undetermined"), ("c9-abs", 0.30, scan((9, 10)), "reproduced"),
+    ("c9-abs", 0.30, scan((2, 2)), "undetermined"),
     ("c9-ge", 0.98, scan(None, (1, 1)), "reproduced"), ("c9-ge", 0.90, scan(None, (0, 1)), "differs"),
     ("c9-true", True, None, "verified"), ("c9-true", False, None, "differs"),
     ("c9-count", True, None, "holds by construction"),
@@ -146,7 +147,7 @@ def test_verdicts(cid, got, sweep, expected):
 
 
 @pytest.mark.parametrize("sweep, message", [
-    (None, "needs its scan"), (scan((9, 9)), "at least 10"), (scan(settings=(5, 4)), "holding, total"),
+    (None, "needs its scan"), (scan(settings=(5, 4)), "holding, total"), (scan((1, 0)), "holding, total"),
     ({"seeds": [10, 10], "settings": [1, 1]}, "needs 'table'"), (scan() | {"seed": 3}, "needs 'table'"),
 ])
 def test_a_computed_claim_needs_a_valid_scan(sweep, message):
