@@ -20,11 +20,15 @@ from .qp import receding_horizon_qp
 GOAL_XS = (-4.0, -2.0, 0.0, 2.0, 4.0)
 
 
-def figure_63_paths(goal_xs=GOAL_XS, height=4.0, start_x=0.0, horizon=20.0, N=100, eta0=-3.0, every=10):
+def figure_63_paths(goal_xs=GOAL_XS, height=4.0, start_x=0.0, horizon=20.0, N=100, eta0=-3.0, every=10,
+                    eta0_exterior=None):
     """Each goal's anticipative path (the receding-horizon QP against the others) and its plain optimum.
-    Returns ``(goals (G, 2), anticipative [(N+1, 2)], plain [(N+1, 2)])``."""
-    if not (np.isfinite(eta0) and eta0 < 0):
-        raise ValueError(f"eta0 must be a negative finite number (a strict bound that loosens to 0), got {eta0!r}")
+    ``eta0_exterior``: a bound of its own for the two far ends (the thesis's ``eta_i`` may differ by pair;
+    default ``eta0``). Returns ``(goals (G, 2), anticipative [(N+1, 2)], plain [(N+1, 2)])``."""
+    eta0_exterior = eta0 if eta0_exterior is None else eta0_exterior
+    for name, value in (("eta0", eta0), ("eta0_exterior", eta0_exterior)):
+        if not (np.isfinite(value) and value < 0):
+            raise ValueError(f"{name} must be a negative finite number (a strict bound that loosens to 0), got {value!r}")
     dt = horizon / N
     dyn = single_integrator(2, dt)
     goals = np.array([[x, height] for x in goal_xs], dtype=float)
@@ -33,7 +37,8 @@ def figure_63_paths(goal_xs=GOAL_XS, height=4.0, start_x=0.0, horizon=20.0, N=10
     paths, plain = [], []
     for i, J in enumerate(costs):
         others = [c for j, c in enumerate(costs) if j != i]
-        paths.append(receding_horizon_qp(dyn, J, others, x0, N, lambda s: eta0 * (1.0 - s), every=every)[0])
+        start = eta0_exterior if i in (0, len(costs) - 1) else eta0
+        paths.append(receding_horizon_qp(dyn, J, others, x0, N, lambda s, e=start: e * (1.0 - s), every=every)[0])
         plain.append(solve(dyn, J, x0, N).xs)
     return goals, paths, plain
 
@@ -78,3 +83,15 @@ def figure_63_scan(eta0s, heights, start_xs, horizon=20.0, N=100, every=10, goal
                 frames.append(m.assign(eta0=eta0, height=height, start_x=start_x))
                 cells.append({"eta0": eta0, "height": height, "start_x": start_x, **figure_63_verdicts(m)})
     return pd.DataFrame(cells), pd.concat(frames, ignore_index=True)
+
+
+def figure_63_variants(variants, goal_xs=GOAL_XS):
+    """:func:`figure_63_verdicts` for each of ``variants`` (``{label: keyword arguments of
+    :func:`figure_63_paths`}``), e.g. finer replanning, other horizons or per-pair bounds: one row per variant."""
+    rows = []
+    for label, kwargs in variants.items():
+        goals, paths, _ = figure_63_paths(goal_xs, **kwargs)
+        m = figure_63_measures(goals, paths)
+        rows.append({"variant": label, **figure_63_verdicts(m),
+                     "largest outward excursion": float(m["outward excursion"].max()), "largest turn (deg)": float(m["turn"].max())})
+    return pd.DataFrame(rows)
