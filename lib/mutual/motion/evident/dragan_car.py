@@ -89,13 +89,18 @@ class Continuations:
         """``(V (G, N+1), dV/dx (G, N+1, n))`` along the states ``xs`` (N+1, n)."""
         G, n = len(self.goals), xs.shape[1]
         z0 = np.concatenate([np.tile(xs, (G, 1)), np.zeros((G * (self.N + 1), 1))], axis=1)
-        batch = ilqr_batch(_frozen_step, _frozen_running, _frozen_terminal, z0, np.where(self.live, self.us, 0.0),
-                           self.params, second_order="auto", max_iter=500)
-        self.us = np.stack([batch[i].us for i in range(len(batch))])
+        guess = np.where(self.live, self.us, 0.0)
+        batch = ilqr_batch(_frozen_step, _frozen_running, _frozen_terminal, z0, guess, self.params,
+                           second_order="auto", max_iter=500)
+        results = [r if r is not None else ilqr(_frozen_step, _frozen_running, _frozen_terminal, z0[i], guess[i],
+                                                {k: v[i] for k, v in self.params.items()}, max_iter=2000)
+                   for i, r in enumerate(batch.results)]                   # a member the batch did not finish
+        self.us = np.stack([r.us for r in results])
         self.solves += 1
         with jax.enable_x64(True):
             grads = np.asarray(_STATE_GRADIENTS(jnp.asarray(z0), jnp.asarray(self.us), self.params))
-        return batch.costs.reshape(G, self.N + 1), grads[:, :n].reshape(G, self.N + 1, n)
+        costs = np.array([r.cost for r in results])
+        return costs.reshape(G, self.N + 1), grads[:, :n].reshape(G, self.N + 1, n)
 
 
 def _posterior_score(us, task, V0, V, dV, xs_ref, weights, prior_logits):

@@ -78,7 +78,9 @@ def receding_horizon_ilqr_batch(tasks, w0, w1, schedules, every=1, **ilqr_option
     """:func:`receding_horizon_ilqr` for several members at once (one :func:`mutual.motion.trajopt.ilqr_batch`
     per replanning): ``tasks`` (B tasks of the same dynamics and steps, e.g. other hazards) and ``schedules``
     (B alpha schedules) pair up member by member. Returns a list of B dicts like
-    :func:`receding_horizon_ilqr`'s; a replanning that fails in a member raises ILQRError naming it."""
+    :func:`receding_horizon_ilqr`'s. A member the batch does not finish is solved again alone by
+    :func:`mutual.motion.trajopt.ilqr` (Gauss-Newton, then DDP near the minimum; up to 2000 iterations), whose
+    ILQRError stops the run."""
     tasks, schedules = list(tasks), list(schedules)
     if not tasks or len(tasks) != len(schedules) or not all(isinstance(t, es.EvidentSafetyTask) for t in tasks):
         raise ValueError("tasks and schedules must be equally long, non-empty, and tasks EvidentSafetyTasks")
@@ -103,13 +105,15 @@ def receding_horizon_ilqr_batch(tasks, w0, w1, schedules, every=1, **ilqr_option
         guess = np.where(np.arange(N)[None, :, None] >= t, plan, 0.0)
         z0 = np.concatenate([xs[:, t], np.zeros((B, 1))], axis=1)
         batch = ilqr_batch(_frozen_step, _frozen_running, _frozen_terminal, z0, guess, stacked, **ilqr_options)
-        for b in range(B):
-            result = batch[b]
+        results = [batch.results[b] if batch.results[b] is not None else       # a member the batch did not finish:
+                   ilqr(_frozen_step, _frozen_running, _frozen_terminal, z0[b], guess[b], params[b], max_iter=2000)
+                   for b in range(B)]                                         # alone, with DDP near the end
+        for b, result in enumerate(results):
             plan[b] = result.us
             iterations[b].append(result.iterations)
         stop = starts[i + 1] if i + 1 < len(starts) else N
         us[:, t:stop] = plan[:, t:stop]
-        xs[:, t:stop + 1] = np.stack([r.xs[t:stop + 1, :-1] for r in batch.results])
+        xs[:, t:stop + 1] = np.stack([r.xs[t:stop + 1, :-1] for r in results])
     return [{"xs": xs[b], "us": us[b], "alphas": alphas[b][np.arange(N) // every], "replans": len(starts),
              "iterations": iterations[b]} for b in range(B)]
 
