@@ -106,7 +106,8 @@ def figure_61_scan(effort_weights, keep_out_weights, alphas, steps=100):
     and ``alpha`` (the goal weight stays ``a1 = 100``). One row per cell: the closest approach of H0, H1 and
     the legible path to the person, whether H1 "comes concerningly close" (:func:`.evidence.close_but_clear`)
     and whether the legible path passes "clearly farther" (at least 1.5 times H1's closest approach, H1 clear
-    of the person), and any solver error. A path whose keep-out feature exceeds that of the less averse
+    of the person; the first version of this rule, ``legible > H1 > radius``, is kept beside it: comparing
+    optima under both costs all but forces it, so it cannot test the thesis), and any solver error. A path whose keep-out feature exceeds that of the less averse
     hypothesis (:func:`keep_out_feature`) is not a global optimum and is replaced by the best multi-start run
     when that costs less."""
     base, w0, w1 = es.figure_scenario("6.1", steps=steps)
@@ -134,6 +135,8 @@ def figure_61_scan(effort_weights, keep_out_weights, alphas, steps=100):
                              "H1 close but clear": bool(h1 is not None and close_but_clear(d1, base.radius)),
                              "legible clearly farther": bool(legible is not None and h1 is not None
                                                              and d1 > base.radius and dl >= 1.5 * d1),
+                             "legible farther (first rule)": bool(legible is not None and h1 is not None
+                                                                  and dl > d1 > base.radius),
                              "error": err1 or err})
     return pd.DataFrame(rows)
 
