@@ -15,12 +15,13 @@ def scan_entry(table, holds, by, name, seeds=None, limit=6):
     ``table``: one row per cell of the scan (a DataFrame); ``holds``: the name of its boolean column (the
     statement holds in that cell, for at least 9 of 10 seeds where seeded); ``by``: the columns that name a
     cell; ``name``: the saved table or figure that shows the scan; ``seeds``: ``[holding, total]`` at the
-    chosen set-up, or None for an experiment with no random draw. ``flips`` lists up to ``limit`` cells
-    where the statement fails (and how many more), or is empty."""
+    chosen set-up, or None for an experiment with no random draw. ``flips`` lists up to ``limit`` cells of the
+    minority: where the statement fails, or, when it holds in fewer cells than it fails, where it holds; empty
+    when it holds everywhere."""
     ok = table[holds].astype(bool)
-    failing = table[~ok]
-    shown = "; ".join(_cell(row, by) for _, row in failing.head(limit).iterrows())
-    more = f" (and {len(failing) - limit} more)" if len(failing) > limit else ""
-    flips = f"fails in {len(failing)} of {len(table)} cells: {shown}{more}" if len(failing) else ""
+    few, verb = (table[ok], "holds only") if 0 < ok.sum() < (~ok).sum() else (table[~ok], "fails")
+    shown = "; ".join(_cell(row, by) for _, row in few.head(limit).iterrows())
+    more = f" (and {len(few) - limit} more)" if len(few) > limit else ""
+    flips = f"{verb} in {len(few)} of {len(table)} cells: {shown}{more}" if (~ok).any() else ""
     return {"table": name, "seeds": None if seeds is None else [int(seeds[0]), int(seeds[1])],
             "settings": [int(ok.sum()), int(len(table))], "flips": flips}
