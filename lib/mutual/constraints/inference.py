@@ -28,7 +28,7 @@ class InferenceResult:
     or -- with pruning -- not scored because its bound could not win), ``gain[i]`` (K,) their
     exact per-demonstration log-likelihood gains, ``mask`` the final constraint mask Phi_C
     (constraints only; each MDP's unavailable actions are added by the backups), ``stop`` why
-    the run ended ("rounds", "min_gain" or "no feasible candidate") and ``scored[i]`` how many
+    the run ended ("rounds", "min_gain", "no feasible candidate" or "until") and ``scored[i]`` how many
     candidates were scored exactly in round i (the last entry: the round that stopped it)."""
 
     chosen: list
@@ -158,7 +158,7 @@ def _pruned_round(tasks, candidates, idx, mask, floor, engine, first=32):
 
 
 def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=None, criterion="F", prune=False,
-                     engine="auto"):
+                     engine="auto", until=None):
     """Greedy iterative constraint inference (Section 2.4, after Scobee and Sastry).
 
     Each round scores every feasible, not yet chosen candidate by Algorithm 4 and adds
@@ -176,7 +176,8 @@ def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=No
     demonstrations). ``prune=True`` (ranking by F only) scores exactly only the candidates
     whose upper bound on -log F (:mod:`.bounds`) could win the round: the same choices, far
     fewer backups on large worlds; unscored candidates get log F = nan in the history.
-    ``engine`` as in :func:`mutual.constraints.backup.log_partition`.
+    ``engine`` as in :func:`mutual.constraints.backup.log_partition`. ``until``: a function of the list of
+    chosen candidates that ends inference (``result.stop == "until"``) once it returns True.
     """
     tasks = as_tasks(mdp, demos)
     _check_inputs(tasks, candidates, rounds, min_gain, criterion, prune, engine)
@@ -206,6 +207,9 @@ def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=No
         gains.append(gain)
         mask &= ~candidates.forbidden_matrix[:, best].toarray().reshape(mask.shape)
         available[best] = False
+        if until is not None and until(chosen):
+            stop = "until"
+            break
     return InferenceResult(chosen, history, gains, mask, stop, scored)
 
 

@@ -75,7 +75,7 @@ def chapter3_run(setting, seed, n_demos=N_DEMOS, rounds=ROUNDS):
     demos = sample_demonstrations(mdp, n_demos, first.truth, rng=seed)
     cand = constraint_candidates(mdp, demos)
     relevant, upper, truth = first.candidate_ids(cand)
-    result = greedy_inference(mdp, demos, cand, rounds)
+    result = greedy_inference(mdp, demos, cand, rounds, until=lambda chosen: _settled(chosen, relevant, truth))
     F1 = np.exp(result.log_f[0])
     states = (cand.kind == "state") & np.isfinite(result.gain[0])
     summary = result.summary(relevant, truth)
@@ -92,6 +92,18 @@ def chapter3_run(setting, seed, n_demos=N_DEMOS, rounds=ROUNDS):
             "upper not identified": len(upper) - sum(k in upper for k in result.before_first_untrue(truth))}
 
 
+def _settled(chosen, relevant, truth):
+    """Whether more rounds could change the measured numbers: they cannot once the task-relevant truth is
+    complete and a later choice exists, and an untrue constraint has been chosen."""
+    done = [chosen.index(k) for k in relevant if k in chosen]
+    return (len(done) == len(relevant) and max(done) < len(chosen) - 1
+            and any(k not in truth for k in chosen))
+
+
+def _untrue_chosen(chosen, truth):
+    return any(k not in truth for k in chosen)
+
+
 def blindspot_run(setting, seed, n_demos=N_DEMOS, rounds=ROUNDS + 4):
     """The blind-spot experiment (Figure 3.3's caption) on one set-up: the first task's demonstrations
     (``seed``) pooled with those of the two upper-half tasks (seeds ``BLINDSPOT_SEEDS + 10 seed``, so seed 0
@@ -106,7 +118,7 @@ def blindspot_run(setting, seed, n_demos=N_DEMOS, rounds=ROUNDS + 4):
         sets.append(sample_demonstrations(task.grid.mdp, n_demos, task.truth, rng=BLINDSPOT_SEEDS[name] + 10 * seed))
     cand = constraint_candidates(mdps, sets)
     _, upper, truth = first.candidate_ids(cand)
-    result = greedy_inference(mdps, sets, cand, rounds)
+    result = greedy_inference(mdps, sets, cand, rounds, until=lambda chosen: _untrue_chosen(chosen, truth))
     return {"reward scale": setting.reward_scale, "horizon": setting.horizon, "width": setting.width, "seed": seed,
             "upper identified, pooled": sum(k in upper for k in result.before_first_untrue(truth))}
 

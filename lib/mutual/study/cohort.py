@@ -171,10 +171,17 @@ def avoidance_onset(value, level=0.0, resolution=1601):
     return float(-(xs[i - 1] + frac * (xs[i] - xs[i - 1])))
 
 
-def study_value_functions(quick=False, progress=False):
+def study_value_functions(quick=False, progress=False, exact=False):
     """The supervisor library over ``STUDY_W_MAXES`` (obstacle radius 1) and the Conservative value
-    function (true dynamics, obstacle radius doubled), on the quick or full grid (disk-cached)."""
+    function (true dynamics, obstacle radius doubled), on the quick or full grid (disk-cached). With
+    ``exact`` both are the closed form evaluated exactly at every state
+    (:class:`mutual.supervision.exact.ExactValueFunction`): no HJ solve, no interpolation error."""
     grid = QUICK_GRID if quick else FULL_GRID
+    if exact:
+        from ..supervision.exact import exact_library, exact_value_function
+
+        return (exact_library(STUDY_W_MAXES, OBSTACLE_RADIUS, grid),
+                exact_value_function(TRUE_W_MAX, 2 * OBSTACLE_RADIUS, grid))
     library = value_library(STUDY_W_MAXES, OBSTACLE_RADIUS, grid_spec=grid, progress=progress)
     conservative = avoid_value_function(TRUE_W_MAX, 2 * OBSTACLE_RADIUS, grid_spec=grid, progress=progress)
     return library, conservative

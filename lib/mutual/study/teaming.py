@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..supervision.dubins import TRUE_W_MAX, dubins_step
+from ..supervision.dubins import TRUE_W_MAX, closed_form_dtheta, closed_form_values, dubins_step
 from ..supervision.reachability import ValueFunction
 from ..supervision.supervisor import NoisySupervisor
 
@@ -165,14 +165,38 @@ class _Stack:
         specs = {f.grid_spec for f in functions}
         if len(specs) != 1:
             raise ValueError(f"all {role} value functions must share one grid_spec, got {len(specs)} different grids")
+        kinds = {bool(f.exact) for f in functions}
+        if len(kinds) != 1:
+            raise ValueError(f"the {role} value functions must be all exact or all on the grid")
         self.spec = specs.pop()
+        self.exact = kinds.pop()
         self.size = int(np.prod(self.spec.shape))
-        self.values = np.concatenate([f.values.ravel() for f in functions])
-        self.dtheta = np.concatenate([f.dvalues_dtheta.ravel() for f in functions])
+        if self.exact:      # the closed form per trial: turning radius v / w_max and obstacle radius
+            self.turn = np.array([f.speed / f.w_max for f in functions])[np.asarray(which)]
+            self.radius = np.array([f.obstacle_radius for f in functions])[np.asarray(which)]
+        else:
+            self.values = np.concatenate([f.values.ravel() for f in functions])
+            self.dtheta = np.concatenate([f.dvalues_dtheta.ravel() for f in functions])
         self.offset = np.asarray(which) * self.size
+
+    def _exact(self, states, fill_value, derivative, rows):
+        """The closed form (exact value functions) of each trial's function at ``states`` (B, ..., 3)."""
+        pick = (lambda a: a) if rows is None else (lambda a: a[rows])
+        shape = (-1,) + (1,) * (states.ndim - 2)
+        turn, radius = pick(self.turn).reshape(shape), pick(self.radius).reshape(shape)
+        turn, radius = np.broadcast_to(turn, states.shape[:-1]), np.broadcast_to(radius, states.shape[:-1])
+        inside = (np.abs(states[..., 0]) <= self.spec.half_width) & (np.abs(states[..., 1]) <= self.spec.half_width)
+        out = np.full(states.shape[:-1], fill_value, dtype=float)
+        where = np.nonzero(inside)
+        s = states[where]
+        f = closed_form_dtheta if derivative else closed_form_values
+        out[where] = f(s[:, 0], s[:, 1], s[:, 2], turn[where], radius[where])
+        return out
 
     def interp(self, states, fill_value=np.inf, derivative=False, rows=None):
         """V (or dV/dtheta) of each trial's function at ``states`` (B, ..., 3); ``rows`` selects trials."""
+        if self.exact:
+            return self._exact(states, fill_value, derivative, rows)
         offset = self.offset if rows is None else self.offset[rows]
         offset = np.broadcast_to(offset.reshape(offset.shape + (1,) * (states.ndim - 2)), states.shape[:-1])
         inside = (np.abs(states[..., 0]) <= self.spec.half_width) & (np.abs(states[..., 1]) <= self.spec.half_width)

@@ -10,11 +10,18 @@ import numpy as np
 import pandas as pd
 
 from .control import wilson_interval
-from .dubins import TRUE_W_MAX, _check_positive, _real, check_states
+from .dubins import TRUE_W_MAX, _check_positive, _real, check_states, closed_form_values
+from .exact import exact_counterpart, has_closed_form, interpolated_closed_form
 from .supervisor import NoisySupervisor, collect_interventions
 from .value_function import ValueFunction, ValueLibrary, unsafe_set_contains
 
 PRIORS = ("mle", "map")
+VALUES = ("auto", "exact", "grid")
+
+
+class GridValueWarning(UserWarning):
+    """A fit on grid-interpolated values sits within the grid's error: the bias the interpolation puts on
+    the values at the interventions exceeds the standard error of the fitted margin mu."""
 
 
 class LibraryEdgeWarning(UserWarning):
@@ -45,6 +52,8 @@ class SupervisorFit:
     n: int
     prior: str
     boundary: str = None
+    values: str = "grid"
+    value_error: float = float("nan")
 
     def __repr__(self):
         w = self.library.w_maxes
@@ -52,7 +61,8 @@ class SupervisorFit:
                                                                            ("mu+2sigma", 2)))
         return (f"SupervisorFit(w_max={_fmt(self.w_max)}, mu={_fmt(self.mu)}, sigma={_fmt(self.sigma)}, "
                 f"n={self.n}, prior={self.prior!r}, alpha levels: {levels}; library of {len(w)} members "
-                f"w_max {_fmt(w.min())}..{_fmt(w.max())} ({self.library.method}), boundary={self.boundary!r})")
+                f"w_max {_fmt(w.min())}..{_fmt(w.max())} ({self.library.method}), values={self.values!r}, "
+                f"boundary={self.boundary!r})")
 
     @property
     def w_max(self):
@@ -85,7 +95,7 @@ class SupervisorFit:
         """Fraction of intervention ``states`` at or below ``alpha = mu + k sigma`` of the fitted member:
         the interventions a robot avoiding at ``alpha`` keeps clear of (Sec. 4.5; ~Phi(k) in expectation)."""
         s = check_states(states)
-        values = self.value_fn.interp(s)
+        values = member_values(self.library, s, self.values)[self.index]
         if np.isnan(values).any():
             raise ValueError(f"states: {int(np.isnan(values).sum())} lie outside the library's grid "
                              f"(|x|, |y| <= {self.library.grid_spec.half_width})")
@@ -140,6 +150,42 @@ def numerical_gaussian_fit(values, mu_min=None):
     return mus, sigmas, logliks
 
 
+def _evaluation(library, values):
+    """How the fit evaluates the library: "exact" (the closed form at the states) or "grid"."""
+    if not isinstance(values, str) or values not in VALUES:
+        raise ValueError(f"values must be one of {VALUES}, got {values!r}")
+    closed = all(has_closed_form(m) for m in library)
+    if values == "exact" and not closed:
+        raise ValueError("values='exact': the library's members have a disturbance, for which no closed form exists; "
+                         "use values='grid'")
+    return "exact" if (values == "auto" and closed) or values == "exact" else "grid"
+
+
+def member_values(library, states, values="auto"):
+    """Every member's value at ``states`` (n, 3) -> (b, n): the closed form evaluated exactly where it exists
+    (``values="auto"`` or ``"exact"``: no interpolation error) or trilinear interpolation on the grid
+    (``"grid"``); NaN off the grid's (x, y) domain either way."""
+    s = check_states(states)
+    if _evaluation(library, values) == "grid" or library.members[0].exact:
+        return library.interp_all(s)
+    inside = np.all(np.abs(s[:, :2]) <= library.grid_spec.half_width, axis=1)
+    out = np.stack([closed_form_values(s[:, 0], s[:, 1], s[:, 2], m.speed / m.w_max, m.obstacle_radius)
+                    for m in library])
+    return np.where(inside, out, np.nan)
+
+
+def _grid_bias(library, states, index):
+    """The mean error of the grid's values of member ``index`` at ``states``: against the closed form where it
+    exists, else the closed form's own interpolation error on the same grid (no disturbance), a lower bound."""
+    member = library[index]
+    exact = closed_form_values(states[:, 0], states[:, 1], states[:, 2], member.speed / member.w_max,
+                               member.obstacle_radius)
+    if has_closed_form(member):
+        return float(np.mean(member.interp(states) - exact))
+    return float(np.mean(interpolated_closed_form(member.grid_spec, states, member.speed / member.w_max,
+                                                  member.obstacle_radius) - exact))
+
+
 @functools.lru_cache(maxsize=32)
 def _conservative_members(library, reference):
     return np.array([unsafe_set_contains(member, reference) for member in library])
@@ -157,7 +203,7 @@ def _edge(index, admissible):
     return None
 
 
-def fit_supervisor(library, states, prior="mle", reference=None):
+def fit_supervisor(library, states, prior="mle", reference=None, values="auto"):
     """Fit the supervisor's safe set to intervention ``states`` (n, 3): eq. (4.8), (4.9), (4.12).
 
     ``prior="mle"``: the argmax of the maximised likelihood over the library. ``prior="map"``: the MAP
@@ -167,6 +213,13 @@ def fit_supervisor(library, states, prior="mle", reference=None):
     interventions, NaN, states outside the grid, or zero variance (an unbounded likelihood).
     A fit on the slowest or most agile member searched warns (:class:`LibraryEdgeWarning`) and
     says so in ``fit.boundary``: the supervisor may lie beyond the library's range.
+
+    ``values``: how the members are evaluated at the interventions (:func:`member_values`): ``"auto"`` (the
+    default) the exact closed form wherever it exists (a Dubins car without disturbance), else the grid;
+    ``"grid"`` always the grid. On the grid the fit records the grid's bias at the interventions for the
+    chosen member (``fit.value_error``: against the closed form, or for a library with a disturbance the
+    closed form's interpolation error on the same grid) and warns (:class:`GridValueWarning`) when it
+    exceeds the standard error of ``mu*``, sigma* / sqrt(n): the fitted margin then sits in the grid's error.
     """
     if not isinstance(library, ValueLibrary):
         raise ValueError("library must be a mutual.supervision.ValueLibrary")
@@ -175,7 +228,8 @@ def fit_supervisor(library, states, prior="mle", reference=None):
     s = check_states(states)
     if len(s) < 2:
         raise ValueError(f"states must hold at least two interventions to estimate mu and sigma, got {len(s)}")
-    values = library.interp_all(s)
+    evaluation = _evaluation(library, values)
+    values = member_values(library, s, evaluation)
     outside = np.isnan(values[0])
     if outside.any():
         raise ValueError(f"states: {outside.sum()} interventions lie outside the library's grid "
@@ -214,7 +268,16 @@ def fit_supervisor(library, states, prior="mle", reference=None):
                       f"{library.w_maxes[admissible].min():g}..{library.w_maxes[admissible].max():g}): the best model "
                       "may lie beyond the members searched; extend the library to check", LibraryEdgeWarning,
                       stacklevel=2)
-    return SupervisorFit(library, index, mus, np.sqrt(var), logliks, admissible, len(s), prior, boundary)
+    error = float("nan")
+    if evaluation == "grid" and not library.members[0].exact:
+        error = _grid_bias(library, s, index)
+        if abs(error) > np.sqrt(var[index] / len(s)):
+            warnings.warn(f"the fit sits in the grid's error: at the {len(s)} interventions the grid's values of the "
+                          f"chosen member (w_max = {library.w_maxes[index]:g}) are off by {error:+.3g} on average, more "
+                          f"than the standard error of mu* ({np.sqrt(var[index] / len(s)):.3g}); evaluate exactly "
+                          "(values='auto') or use a finer grid", GridValueWarning, stacklevel=2)
+    return SupervisorFit(library, index, mus, np.sqrt(var), logliks, admissible, len(s), prior, boundary,
+                         evaluation, error)
 
 
 def recovery_study(library, generators, n_values, seeds, start_distance, prior="mle"):
@@ -245,8 +308,11 @@ def recovery_study(library, generators, n_values, seeds, start_distance, prior="
         raise ValueError("seeds must hold at least one seed")
     _check_positive("start_distance", start_distance)
     rows = []
+    exact = _evaluation(library, "auto") == "exact"
     for w_max, mu, sigma in generators:
-        sup = NoisySupervisor(library[library.index_of(w_max)], mu, sigma)
+        member = library[library.index_of(w_max)]
+        # the simulated supervisor judges with the same values the fit reads: exact where the fit is exact
+        sup = NoisySupervisor(exact_counterpart(member) if exact else member, mu, sigma)
         for seed in seeds:
             rng = np.random.default_rng(seed)
             states = collect_interventions(sup, n_values[-1], rng, start_distance)
