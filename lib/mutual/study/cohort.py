@@ -171,6 +171,21 @@ def avoidance_onset(value, level=0.0, resolution=1601):
     return float(-(xs[i - 1] + frac * (xs[i] - xs[i - 1])))
 
 
+def late_intervention_bound(participants, interventions):
+    """The noisy idealized supervisor's bound on interventions inside the Standard reachable set (Fig. 5.6):
+    a conservative supervisor (eq. 4.4, V_S <= V) intervenes at V_S = mu - w, so an intervention can lie in
+    {V < 0} only if w > mu: at most sum_i n_i Phi(-mu_i / sigma_i) over the ``participants`` (columns
+    participant, mu, sigma) with their counts in ``interventions``. Returns (expected bound, per-person table)."""
+    from scipy import stats
+
+    counts = interventions.groupby("participant").size()
+    people = participants.set_index("participant").loc[counts.index]
+    share = stats.norm.cdf(-people["mu"] / people["sigma"])
+    table = pd.DataFrame({"interventions": counts, "mu / sigma": people["mu"] / people["sigma"],
+                          "P(w > mu)": share, "expected inside Standard (at most)": counts * share})
+    return float(table["expected inside Standard (at most)"].sum()), table
+
+
 def study_value_functions(quick=False, progress=False, exact=False):
     """The supervisor library over ``STUDY_W_MAXES`` (obstacle radius 1) and the Conservative value
     function (true dynamics, obstacle radius doubled), on the quick or full grid (disk-cached). With

@@ -102,6 +102,21 @@ class SupervisorFit:
         return float(np.mean(values <= self.level(k)))
 
 
+def expected_coverage(k, p):
+    """The expected fraction of ``p`` Gaussian observations at or below their own MLE ``mu* + k sigma*``
+    (eq. 4.8): the share of the learning interventions a robot avoiding at ``alpha = mu + k sigma`` keeps
+    clear of (Sec. 4.5), exactly: with t = (v_i - mean) / sigma*, t^2 / (p - 1) ~ Beta(1/2, (p - 2) / 2), so
+    the share is 1/2 + 1/2 I_{k^2 / (p - 1)}(1/2, (p - 2) / 2) for k >= 0; Phi(k) as p grows."""
+    from scipy import stats
+
+    k_value, p_value = _real(k), _real(p)
+    if k_value is None or not np.isfinite(k_value) or k_value < 0:
+        raise ValueError(f"k must be a finite number >= 0, got {k!r}")
+    if p_value is None or p_value != int(p_value) or p_value < 3:
+        raise ValueError(f"p must be an integer >= 3 (observations), got {p!r}")
+    return float(0.5 + 0.5 * stats.beta.cdf(min(k_value ** 2 / (p_value - 1), 1.0), 0.5, (p_value - 2) / 2))
+
+
 def gaussian_mle(values):
     """Eq. (4.8)-(4.9) per row of ``values`` (b, p): ``mu*``, ``sigma*`` and ``log L*``."""
     v = np.asarray(values, dtype=float)
