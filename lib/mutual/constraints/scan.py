@@ -17,7 +17,7 @@ import pandas as pd
 
 from .candidates import constraint_candidates
 from .demonstrations import sample_demonstrations
-from .experiment import BLINDSPOT_SEEDS, BLINDSPOT_TASKS, N_DEMOS, WIDTH, chapter3, scaled_cell
+from .experiment import BLINDSPOT_SEEDS, BLINDSPOT_TASKS, N_DEMOS, SEED, WIDTH, chapter3, scaled_cell
 from .inference import greedy_inference
 
 SEEDS = tuple(range(10))
@@ -53,6 +53,7 @@ class Setting:
 
 
 CHOSEN = Setting()
+CHOSEN_SEED = SEED
 
 
 def full_scan():
@@ -166,6 +167,16 @@ def holding_table(table, statement):
         ok = [bool(statement(r)) for r in part.to_dict("records")]
         rows.append({"reward scale": b, "horizon": T, "width": w, "holds": sum(ok), "seeds": len(ok)})
     return pd.DataFrame(rows)
+
+
+def holding_pivot(table, statement):
+    """:func:`holding_table` laid out for reading: one row per (width, horizon), one column per reward scale,
+    each cell "seeds holding / seeds"."""
+    cells = holding_table(table, statement)
+    cells["holds / seeds"] = [f"{h}/{n}" for h, n in zip(cells["holds"], cells["seeds"])]
+    pivot = cells.pivot(index=["width", "horizon"], columns="reward scale", values="holds / seeds")
+    pivot.columns = [f"scale {b:g}" for b in pivot.columns]
+    return pivot.reset_index()
 
 
 def scan_summary(table, statement, chosen=CHOSEN, table_name=""):
