@@ -363,3 +363,27 @@ def recovery_summary(table, confidence=0.95):
                      "mean_abs_mu_error": (part["mu_hat"] - part["mu"]).abs().mean(),
                      "mean_sigma_ratio": (part["sigma_hat"] / part["sigma"]).mean()})
     return pd.DataFrame(rows)
+
+
+def data_efficiency_scan(table, n, chosen, share=0.9, table_name=""):
+    """Data efficiency read from a :func:`recovery_study` table: for each supervisor (``w_max``, ``sigma``), how
+    many sessions of ``n`` interventions recover ``w_max``, and whether at least ``share`` of them do. Returns
+    ``(cells, scan)``: the cells as a DataFrame, and the scan in the form of the reproduction report
+    (``seeds`` [recovered, sessions] at the ``chosen`` (w_max, sigma), ``settings`` [cells recovering in at least
+    ``share`` of sessions, cells], ``flips``: the cells that do not)."""
+    if not isinstance(table, pd.DataFrame) or {"w_max", "sigma", "n", "recovered"} - set(table.columns):
+        raise ValueError("table must be a recovery_study DataFrame")
+    part = table[table["n"] == n]
+    if part.empty:
+        raise ValueError(f"n: the table has no sessions of {n} interventions (has {sorted(table['n'].unique())})")
+    cells = part.groupby(["w_max", "sigma"])["recovered"].agg(recovered="sum", sessions="size").reset_index()
+    cells["recovered"] = cells["recovered"].astype(int)
+    cells["holds"] = cells["recovered"] >= np.ceil(share * cells["sessions"])
+    at = cells[np.isclose(cells["w_max"], chosen[0]) & np.isclose(cells["sigma"], chosen[1])]
+    if len(at) != 1:
+        raise ValueError(f"chosen: {chosen!r} is not one of the (w_max, sigma) cells")
+    flips = "; ".join(f"w_max {r['w_max']:g}, sigma {r['sigma']:g}: {r['recovered']}/{r['sessions']}"
+                      for r in cells[~cells["holds"]].to_dict("records"))
+    scan = {"table": table_name, "seeds": [int(at["recovered"].iloc[0]), int(at["sessions"].iloc[0])],
+            "settings": [int(cells["holds"].sum()), int(len(cells))], "flips": flips}
+    return cells, scan
