@@ -104,7 +104,7 @@ def test_the_property_holds_on_exact_values():
 
 
 def test_the_teaming_batch_evaluates_exact_functions_exactly():
-    from mutual.study.teaming import _Stack
+    from mutual.study.value_stack import _Stack
 
     fns = [exact_value_function(w, r, GRID) for w, r in ((1.0, 1.0), (0.5, 2.0))]
     stack = _Stack(fns, np.array([0, 1, 1]), "team")
