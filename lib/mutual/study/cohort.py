@@ -115,11 +115,16 @@ def estimator_recovery(library, w_maxes, mu, sigmas, n_scenes=40, repeats=10, se
     for w in w_maxes:
         for sigma in sigmas:
             sup = NoisySupervisor(library[library.index_of(w)], mu, sigma)
-            fits = [fit_supervisor(library, phase2_interventions(sup, n_scenes, rng)[["x", "y", "theta"]].to_numpy()).w_max
-                    for _ in range(repeats)]
+            fits = [fit_supervisor(library, phase2_interventions(sup, n_scenes, rng)[["x", "y", "theta"]].to_numpy(),
+                                   values=_same_values(library)).w_max for _ in range(repeats)]
             rows.append({"true w_max": w, "sigma": sigma, "recovered": float(np.mean(np.isclose(fits, w))),
                          "mean fitted w_max": float(np.mean(fits))})
     return pd.DataFrame(rows)
+
+
+def _same_values(library):
+    """Fit on the values the simulated supervisors judge with: exact for an exact library, else the grid's."""
+    return "exact" if library.members[0].exact else "grid"
 
 
 def learned_set_cluster(w_max, mu, gradual_below=0.75, conservative_from=0.5):
@@ -263,7 +268,7 @@ def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), s
         table = phase2_interventions(sup, n_scenes, rng).assign(participant=pid)
         states = table[["x", "y", "theta"]].to_numpy()
         try:
-            fit = fit_supervisor(library, states, prior="mle")
+            fit = fit_supervisor(library, states, prior="mle", values=_same_values(library))
         except ValueError as err:
             raise ValueError(f"simulated recruit {pid} ({len(states)} interventions in {n_scenes} scenes) cannot "
                              f"be fitted: {err}") from None
