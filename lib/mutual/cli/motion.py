@@ -74,10 +74,9 @@ def run_legible(args):
             solution = solve_legible(spec)
         bar.update(1)
     table = trajectory_table(spec, solution)
-    outputs = {
-        "trajectory": common.write_csv(table, common.output_path(args, "legible_trajectory.csv"), float_format="%.8g"),
-        "figure": common.save_figure(_figure(spec, solution), common.output_path(args, "legible_trajectory.png")),
-    }
+    with common.output_set(args) as files:
+        outputs = {"trajectory": files.csv(table, "legible_trajectory.csv"),
+                   "figure": files.figure(_figure(spec, solution), "legible_trajectory.png")}
     xs, ps = solution["legible"][0], solution["predictable"][0]
     results = {
         "command": "motion legible", "input": str(path), "dynamics": spec.dynamics, "method": solution["method"],
