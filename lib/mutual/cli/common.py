@@ -202,7 +202,7 @@ def output_set(args):
         (out.parent if fresh else out).mkdir(parents=True, exist_ok=True)
         staging = Path(tempfile.mkdtemp(prefix=f".{out.name or 'out'}.partial-", dir=out.parent if fresh else out))
     except OSError as err:
-        raise OutputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
+        raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
     files = OutputSet(out, staging)
     try:
         try:
@@ -292,6 +292,9 @@ def run(args, prog):
         return _fail(prog, f"{where}{err.strerror or err}", EXIT_BAD_INPUT)
     except KeyboardInterrupt:
         return _fail(prog, "interrupted", EXIT_INTERRUPTED)
+    except BrokenPipeError:           # the reader of stdout left (| head): the outputs are written; say nothing
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
     except Exception as err:  # an unexpected failure: one line unless asked for the traceback
         if os.environ.get("MUTUAL_DEBUG"):
             raise

@@ -220,9 +220,16 @@ def _checked(args):
         F, df1, df2 = args.from_f
         if not (df1.is_integer() and df2.is_integer() and df1 >= 1 and df2 >= 1):
             raise ValueError(f"--from-f: degrees of freedom must be whole numbers >= 1, got {df1:g} {df2:g}")
+        if df1 + 1 > MAX_SIZES or df2 / df1 + 1 > MAX_N_ANALYTIC:
+            raise ValueError(f"--from-f: F({df1:g}, {df2:g}) implies {df1 + 1:g} levels and {df2 / df1 + 1:g} subjects; "
+                             f"at most {MAX_SIZES:,} levels and {MAX_N_ANALYTIC:,} subjects")
         if args.m is not None and args.m != int(df1) + 1:
             raise ValueError(f"--m {args.m}: F({int(df1)}, {int(df2)}) has {int(df1) + 1} levels")
         args.m = int(df1) + 1
+    low = [p for p in args.power if p <= args.alpha]
+    if low:
+        raise ValueError(f"--power {low[0]:g}: a target power must exceed --alpha {args.alpha:g} (the power at zero "
+                         "effect)")
     if args.eps < 1 / (args.m - 1) - 1e-12:
         raise ValueError(f"--eps {args.eps:g}: epsilon lies in [1/(m-1), 1] = [{1 / (args.m - 1):.4g}, 1] for "
                          f"{args.m} measurements")

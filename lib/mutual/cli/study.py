@@ -9,6 +9,7 @@ level names the ``--within`` column holds.
 """
 
 import importlib
+import math
 import re
 
 from . import common
@@ -160,6 +161,9 @@ def run_anova(args):
         except ValueError as err:      # speak the command line's words, not the library's
             raise type(err)(str(err).replace("aggregate='mean'", "--aggregate mean")) from None
     results = {"command": "study anova", "input": str(path), "where": dict(_filters(args.where)), **results}
+    if not all(0 < abs(results[k]) < math.inf for k in ("ss_error", "ms_error")):
+        results["note"] = ("the sums and mean squares of data this large or small are beyond the range of doubles "
+                           "(null or 0 here); F, p, eps and eta squared were computed in scaled units and are exact")
 
     import pandas as pd
     stem = _stem(args)
@@ -177,20 +181,33 @@ def _figure(anova, pairwise, args):
     common.use_agg()
     import matplotlib.pyplot as plt
     from ..study.plots import plot_condition_means
+    anova, unit = _plotted(anova)
     fig, ax = plt.subplots(figsize=(1.6 + 1.1 * len(anova.levels), 3.4))
     plot_condition_means(ax, anova, pairwise.rename(columns={"p_tukey": "p"}))
-    low = float(anova.cells.to_numpy().min())
+    low, top = float(anova.cells.to_numpy().min()), ax.get_ylim()[1]
     if low < 0:                                   # the bars start at 0; show negative values too
-        top = ax.get_ylim()[1]
         ax.set_ylim(low - 0.05 * (top - low), top)
     selected = ", ".join(v for _, v in _filters(args.where))
     ax.set_xlabel(_cut(args.within))
-    ax.set_ylabel(_cut(f"{selected} ({args.dv})" if selected else args.dv)
+    ax.set_ylabel(_cut(f"{selected} ({args.dv})" if selected else args.dv) + unit
                   + ("\nmean per subject and level" if args.aggregate else ""))
     # the title in lines no wider than the axes (a long one was cut at the figure's right edge)
     ax.set_title(f"means with standard-error bars (n = {anova.n_subjects})\ngrey: subjects; brackets: Tukey HSD p",
                  fontsize=8)
     return fig
+
+
+def _plotted(anova):
+    """The ANOVA to draw, in units of 10^k when its values are too large or small for an axis (1e308 overflows
+    matplotlib's tick arithmetic), and the unit's label."""
+    import dataclasses
+    top = float(abs(anova.cells.to_numpy()).max())
+    if top == 0 or 1e-100 < top < 1e100:
+        return anova, ""
+    k = math.floor(math.log10(top))
+    cells = anova.cells / 10.0 ** k
+    means = {level: float(cells[level].mean()) for level in anova.levels}
+    return dataclasses.replace(anova, cells=cells, means=means), f" (x 1e{k})"
 
 
 def _cut(text, width=60):
@@ -217,9 +234,8 @@ def _summary(r, args):
     lines += [f"  F({r['df1']}, {r['df2']}) = {r['F']:.4g}, p = {r['p']:.4g}; Greenhouse-Geisser epsilon = "
               f"{r['eps']:.3f}, corrected p = {r['p_gg']:.4g}; partial eta squared = {r['eta2p']:.3f}, "
               f"generalized = {r['eta2g']:.3f}"]
-    if not all(0 < abs(r[k]) < float("inf") for k in ("ss_error", "ms_error")):
-        lines.append("  (the sums of squares of data this large or small are beyond the range of doubles; F, p, "
-                     "epsilon and eta squared were computed in scaled units and are exact)")
+    if "note" in r:
+        lines.append(f"  ({r['note']})")
     lines += ["", "  pairwise: Tukey HSD (repeated-measures error term) and paired t-tests (Holm-corrected)",
               f"  {'A':<{width}}{'B':<{width}}{'diff':>10}{'q':>8}{'p Tukey':>10}{'t':>8}{'p Holm':>10}"]
     for row in r["pairwise"]:

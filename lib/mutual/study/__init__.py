@@ -1,7 +1,8 @@
 """Thrust 1, chapter 5: the user study of learned safe sets in human-robot teams.
 
 The counterbalanced design (:mod:`.design`), the tidy study tables and their loaders
-(:mod:`.data`), the repeated-measures statistics in a study's own words (:mod:`.stats`:
+(:mod:`.data`), the subject x level table of any long data set (:mod:`.cells`), the repeated-measures
+statistics in a study's own words (:mod:`.stats`:
 ``rm_anova(data, dv, within, subject)``, ``tukey_rm``, ``paired_t_holm``), the thesis's
 statistics re-derived from its published numbers (:mod:`.published`), and the SIMULATED study:
 the teaming task (:mod:`.teaming`), whole cohorts of simulated supervisors (:mod:`.cohort`), the

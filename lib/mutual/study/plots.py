@@ -91,15 +91,18 @@ def plot_condition_means(ax, anova, tukey=None, colors=None, show_subjects=True)
     ax.bar(x, means, yerr=se, capsize=4, color=colors or None, alpha=0.85, zorder=2,
            error_kw={"zorder": 3, "label": f"mean ± SE (n = {anova.n_subjects})"})
     ax.set_xticks(x, [_short(level) for level in levels])
-    top = float(max((means + se).max(), cells.to_numpy().max()))
-    step = 0.09 * top if top > 0 else 0.1
+    with np.errstate(over="ignore"):
+        top = float(max((means + se).max(), cells.to_numpy().max()))
+        step = 0.09 * top if top > 0 else 0.1
     rows = [] if tukey is None else list(tukey.itertuples())
     for i, row in enumerate(rows):
         a, b = levels.index(row.A), levels.index(row.B)
         y = top + step * (i + 1)
         ax.plot([a, a, b, b], [y - step * 0.3, y, y, y - step * 0.3], color="black", lw=0.8)
         ax.text((a + b) / 2, y, f"{significance_stars(row.p)} (p={row.p:.3g})", ha="center", va="bottom", fontsize=7)
-    ax.set_ylim(0, top + step * (len(rows) + 1.2))
+    high = top + step * (len(rows) + 1.2)
+    if np.isfinite(high):                 # data near the largest double: leave matplotlib's limits
+        ax.set_ylim(0, high)
     ax.set_xlabel(str(anova.within))
     return ax
 

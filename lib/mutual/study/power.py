@@ -61,6 +61,8 @@ def _effect(f, partial_eta_squared, rho, m=None):
             where = f"[-1/(m-1), 1) = [{low:.4g}, 1) for m = {m} measurements" if m is not None else "(-1, 1)"
             raise ValueError(f"rho (correlation among the repeated measures) must lie in {where}, got {rho!r}: "
                              "below -1/(m-1) no covariance matrix has equal correlations")
+        if float(f) > 1e150:
+            raise ValueError(f"f must be at most 1e150 (f^2 must stay within the range of doubles), got {f!r}")
         return float(f) ** 2 / (1.0 - rho)
     if rho is not None:
         raise ValueError("rho must not be given with partial_eta_squared: its error term already holds the "
@@ -81,7 +83,11 @@ def rm_anova_noncentrality(n, m, f=None, partial_eta_squared=None, rho=None, eps
     n, m = _positive_int("n", n, 2), _positive_int("m", m, 2)
     fp2 = _effect(f, partial_eta_squared, rho, m)
     eps = _epsilon(epsilon, m)
-    return fp2 * n * m * eps, (m - 1) * eps, (n - 1) * (m - 1) * eps
+    lam = fp2 * n * m * eps
+    if not np.isfinite(lam):
+        raise ValueError(f"the noncentrality f_p^2 N m epsilon = {fp2:.3g} x {n} x {m} x {eps:g} is beyond the range of "
+                         "doubles (the power is 1 for any N)")
+    return lam, (m - 1) * eps, (n - 1) * (m - 1) * eps
 
 
 #: from this noncentrality on, scipy's noncentral F series stops converging (wrong by 0.25 at 1e11)

@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .cells import cell_table
 from .data import LIKERT_RANGE
 from .errors import DegenerateDataError
 from .published import (design_from_f_dofs, f_p_value, recover_from_summary, tukey_from_root_mse,  # noqa: F401
@@ -45,6 +46,12 @@ def _negligible(sum_of_squares, values):
     v = np.asarray(values, dtype=float)
     scale = float(np.max(np.abs(v))) if v.size else 0.0
     return sum_of_squares <= v.size * (_RELATIVE_ZERO * scale) ** 2
+
+
+def _ldexp_quiet(x, e):
+    """``x 2^e``, inf or 0 without a warning where that is beyond the range of doubles (reported as such)."""
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(x, e)
 
 
 def _exponent(values):
@@ -135,92 +142,22 @@ class RMAnova:
                 f"means {means})")
 
 
-def _select_measure(data, dv):
-    """Tidy trial tables (``measure`` and ``value`` columns): ``dv`` may name a measure."""
-    if isinstance(data, pd.DataFrame) and isinstance(dv, str) and dv not in data.columns \
-            and {"measure", "value"} <= set(data.columns) and (data["measure"] == dv).any():
-        return data.loc[data["measure"] == dv].rename(columns={"value": dv})
-    return data
-
-
-def _column_names(data, dv, within, subject):
-    if not isinstance(data, pd.DataFrame):
-        raise ValueError(f"data must be a pandas DataFrame, got {type(data).__name__}")
-    names = {"dv": dv, "within": within, "subject": subject}
-    for arg, name in names.items():
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"{arg} must name a column (a non-empty string), got {name!r}")
-    if len(set(names.values())) < 3:
-        raise ValueError(f"dv, within and subject must be three different columns, got {dv!r}, {within!r}, {subject!r}")
-    missing = [c for c in names.values() if c not in data.columns]
-    if missing:
-        raise ValueError(f"data is missing columns {missing} (it has {list(data.columns)})")
-    if len(data) == 0:
-        raise ValueError("data has no rows")
-
-
-def cell_table(data, dv, within, subject, aggregate=None, levels=None):
-    """Subject x level table of ``dv`` (long data: one row per observation) after the checks a
-    repeated-measures analysis needs.
-
-    ``within`` is the column of the repeated factor (e.g. the treatment), ``subject`` the column of
-    participant ids. Raises ValueError naming the column and row for NaN, non-numeric or infinite
-    values, for several rows in a cell unless ``aggregate='mean'`` averages them, for a subject
-    missing a level (unbalanced design), and for fewer than 2 subjects or levels. ``levels`` picks
-    and orders the levels (default: all, sorted); rows of other levels are an error. In a tidy
-    table with ``measure`` and ``value`` columns (:mod:`mutual.study.data`), ``dv`` may name a
-    measure (e.g. ``"false_positives"``): its rows are analysed.
-    """
-    data = _select_measure(data, dv)
-    _column_names(data, dv, within, subject)
-    for col in (subject, within, dv):
-        bad = data[col].isna().to_numpy()
-        if bad.any():
-            raise ValueError(f"column {col!r} has a missing value (NaN) in row {data.index[bad.argmax()]!r}")
-    values = pd.to_numeric(data[dv], errors="coerce")
-    bad = values.isna().to_numpy()
-    if bad.any():
-        i = bad.argmax()
-        raise ValueError(f"column {dv!r} must be numeric: row {data.index[i]!r} holds {data[dv].iloc[i]!r}")
-    bad = ~np.isfinite(values.to_numpy(dtype=float))
-    if bad.any():
-        raise ValueError(f"column {dv!r} must hold finite numbers: row {data.index[bad.argmax()]!r} holds "
-                         f"{values.iloc[bad.argmax()]!r}")
-    if aggregate not in (None, "mean"):
-        raise ValueError(f"aggregate must be None or 'mean', got {aggregate!r}")
-    d = data[[subject, within]].assign(**{dv: values.astype(float)})
-    if levels is not None:
-        if isinstance(levels, str) or not hasattr(levels, "__iter__"):
-            raise ValueError(f"levels must be a list of the levels of {within!r}, got {levels!r}")
-        levels = list(levels)
-        if len(set(levels)) != len(levels):
-            raise ValueError(f"levels must not repeat a level, got {levels}")
-        unknown = sorted(map(str, set(d[within]) - set(levels)))
-        if unknown:
-            raise ValueError(f"column {within!r} has level(s) {unknown} not among levels={levels}; select the rows first")
-        absent = [level for level in levels if level not in set(d[within])]
-        if absent:
-            raise ValueError(f"level(s) {absent} of levels have no rows in column {within!r}")
-    sizes = d.groupby([subject, within]).size()
-    if aggregate is None and (sizes > 1).any():
-        cell = sizes[sizes > 1].index[0]
-        raise ValueError(f"several rows for ({subject}, {within}) = {cell}; pass aggregate='mean' to average them")
-    wide = d.groupby([subject, within])[dv].mean().unstack(within)
-    wide = wide.reindex(columns=levels) if levels is not None else wide.reindex(columns=sorted(wide.columns))
-    if wide.isna().any().any():
-        holes = wide.isna()
-        who = list(wide.index[holes.any(axis=1)])
-        raise ValueError(f"unbalanced design: subject(s) {who[:5]}{' ...' if len(who) > 5 else ''} miss level(s) "
-                         f"{list(wide.columns[holes.any(axis=0)])} of {within!r}; every subject needs every level")
-    if wide.shape[0] < 2 or wide.shape[1] < 2:
-        raise ValueError(f"need at least 2 subjects and 2 levels of {within!r}, got {wide.shape[0]} subject(s) and "
-                         f"{wide.shape[1]} level(s)")
-    return wide
+def _distinct_levels(columns):
+    """Refuse a wide table whose level columns repeat a name (a pair would be tested twice, or with itself)."""
+    from ..csvfile import check_names
+    seen = set()
+    for name in columns:
+        if name in seen:
+            raise ValueError(f"cells: the level column {name!r} appears twice; each level needs one column")
+        seen.add(name)
+    check_names(list(columns), "levels", "cells", row=lambda i: f"column {i + 1}")
 
 
 def greenhouse_geisser_epsilon(cells):
     """Greenhouse-Geisser epsilon of a subject x level table, from its double-centred covariance S:
     ``tr(S)^2 / ((k-1) sum S_ij^2)``, in ``[1/(k-1), 1]``; 1 when S is zero."""
+    if isinstance(cells, pd.DataFrame):
+        _distinct_levels(cells.columns)
     y = np.asarray(cells, dtype=float)
     if y.ndim != 2 or y.shape[0] < 2 or y.shape[1] < 2 or not np.isfinite(y).all():
         raise ValueError(f"cells must be a finite subject x level table with >= 2 rows and columns, got shape {y.shape}")
@@ -260,7 +197,7 @@ def _anova_of_cells(wide, dv, within, subject):
     df1, df2 = k - 1, (k - 1) * (n - 1)
     F = (ss_effect / df1) / (ss_error / df2)
     eps = greenhouse_geisser_epsilon(y)
-    unscaled = lambda ss: float(np.ldexp(ss, 2 * e))
+    unscaled = lambda ss: float(_ldexp_quiet(ss, 2 * e))
     return RMAnova(F=float(F), df1=df1, df2=df2, p=float(stats.f.sf(F, df1, df2)), mse=unscaled(ss_error / df2),
                    eps=eps, p_gg=float(stats.f.sf(F, eps * df1, eps * df2)), n_subjects=n, levels=tuple(wide.columns),
                    means={c: float(np.ldexp(m, e)) for c, m in zip(wide.columns, col.ravel())}, cells=wide, dv=dv,
@@ -320,6 +257,7 @@ def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, lev
             raise ValueError(f"cells must be a subject x level DataFrame, an RMAnova or long data, got "
                              f"{type(cells).__name__}")
         wide = cells
+    _distinct_levels(wide.columns)
     try:
         y = wide.to_numpy(dtype=float)
     except (TypeError, ValueError):
