@@ -105,7 +105,7 @@ def check_names(values, column, where, row=None):
 def format_exact(value):
     """The shortest text that reads back as the same double: ``repr``, with a whole number's ``.0`` dropped."""
     text = repr(float(value))
-    return text[:-2] if text.endswith(".0") else text
+    return text[:-2] if text.endswith(".0") and text != "-0.0" else text     # "-0" would read back as 0
 
 
 def write_csv(frame, path):

@@ -232,8 +232,8 @@ def _summary(r, args):
               f"  {'error':<18}{r['ss_error']:>11.4g}{r['df2']:>5}{r['ms_error']:>11.4g}",
               f"  {'subjects':<18}{r['ss_subjects']:>11.4g}{r['n_subjects'] - 1:>5}", ""]
     lines += [f"  F({r['df1']}, {r['df2']}) = {r['F']:.4g}, p = {r['p']:.4g}; Greenhouse-Geisser epsilon = "
-              f"{r['eps']:.3f}, corrected p = {r['p_gg']:.4g}; partial eta squared = {r['eta2p']:.3f}, "
-              f"generalized = {r['eta2g']:.3f}"]
+              f"{r['eps']:.3f}, corrected p = {r['p_gg']:.4g}",
+              f"  partial eta squared = {r['eta2p']:.3f}, generalized eta squared = {r['eta2g']:.3f}"]
     if "note" in r:
         lines.append(f"  ({r['note']})")
     lines += ["", "  pairwise: Tukey HSD (repeated-measures error term) and paired t-tests (Holm-corrected)",
