@@ -134,7 +134,8 @@ def analyse(data, dv, within, subject, aggregate=None, levels=None):
         "df1": anova.df1, "df2": anova.df2, "ms_effect": anova.ms_effect, "ms_error": anova.mse,
         "F": anova.F, "p": anova.p, "eps": anova.eps, "p_gg": anova.p_gg,
         "eta2p": anova.eta2p, "eta2g": anova.eta2g, "mse": anova.mse,
-        "pairwise": pairwise_comparisons(anova, as_records=True),
+        "pairwise": [{k: str(v) if k in ("A", "B") else int(v) if k == "df" else float(v) for k, v in row.items()}
+                     for row in pairwise.to_dict("records")],        # the table's numbers (Tukey's p once)
     }
 
 
