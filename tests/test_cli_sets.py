@@ -54,6 +54,8 @@ def test_a_failure_while_writing_leaves_none(fresh, tmp_path, capsys, monkeypatc
     calls = []
 
     def full_disk(self, fig, name):          # the fourth file of four hits a full disk
+        import matplotlib.pyplot as plt
+        plt.close(fig)
         calls.append(name)
         raise OSError(errno.ENOSPC, "No space left on device", str(self.path(name)))
     monkeypatch.setattr(common.OutputSet, "figure", full_disk)
