@@ -102,7 +102,10 @@ def unsafe_reach(w_max, radius, speed=SPEED):
     _check_positive("w_max", w_max)
     _check_positive("radius", radius)
     _check_positive("speed", speed)
-    return float(np.sqrt(2 * speed / w_max * radius + radius ** 2))
+    if radius < 1e150 and speed / w_max < 1e150:
+        return float(np.sqrt(2 * speed / w_max * radius + radius ** 2))
+    with np.errstate(over="ignore"):     # sqrt(r) sqrt(2 R + r): no overflow of r^2 (or inf) for huge radii
+        return float(np.sqrt(np.float64(radius)) * np.sqrt(2 * (np.float64(speed) / w_max) + radius))
 
 
 def avoid_value_closed_form(states, w_max, radius, speed=SPEED, tol=1e-9):

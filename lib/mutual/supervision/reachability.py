@@ -148,10 +148,11 @@ def plausibility_check(w_max, radius, speed, d_max, spec):
 
 
 def _check_domain(w_maxes, radius, speed, spec):
-    need = unsafe_reach(float(np.min(w_maxes)), radius, speed) + 4 * spec.spacings[0]
+    reach = unsafe_reach(float(np.min(w_maxes)), radius, speed)
+    need = reach + 4 * spec.spacings[0]
     if spec.half_width < need:
         raise ValueError(f"grid_spec.half_width={spec.half_width} is too small: the unsafe set of w_max="
-                         f"{np.min(w_maxes):g} reaches {unsafe_reach(float(np.min(w_maxes)), radius, speed):.3g} "
+                         f"{np.min(w_maxes):g} (obstacle radius {radius:g}, speed {speed:g}) reaches {reach:.3g} "
                          f"from the obstacle centre; need at least {need:.3g} (reach + 4 cells)")
 
 
