@@ -13,7 +13,10 @@
   naming the notebook and the cell (the executed copy keeps the traceback).
 * SIGINT and SIGTERM interrupt the running cell (so its atomic writes clean up after themselves),
   shut the kernel down, remove temporary files a killed kernel left behind, and stop with one line.
-* Kernels run with ``TQDM_DISABLE=1``: no progress bars in the executed notebooks.
+* Kernels run with ``TQDM_DISABLE=1``: no progress bars in the executed notebooks, and with numpy's
+  and OpenBLAS's code paths pinned to x86-64 with AVX2 (:mod:`.numerics`): the same bits on every
+  such machine.
+* One runner per output folder: a second one stops at once, naming the first (:mod:`.lock`).
 """
 
 import argparse
@@ -33,6 +36,7 @@ import nbformat
 from ..atomic import write_text
 from . import paths as _paths
 from .lock import OutputBusy, check_output_folder, disk_error, output_lock
+from .numerics import portable_env
 from .paths import OUTPUT_ENV, executed_dir, figures_dir, generated_data_dir, is_committed, results_dir
 from .runs import kernel_env, run_mode, shown
 
@@ -273,8 +277,8 @@ def _execute(nb, path, parameters, timeout, env, mode):
     results = (results_dir() / f"{path.stem}.json", results_dir() / "extensions" / f"{path.stem}.json")
     for stale in results:
         stale.unlink(missing_ok=True)
-    kernel = {**os.environ, **KERNEL_ENV, OUTPUT_ENV: str(figures_dir().resolve()), **kernel_env(path, parameters),
-              **(env or {})}
+    kernel = {**os.environ, **KERNEL_ENV, **portable_env(), OUTPUT_ENV: str(figures_dir().resolve()),
+              **kernel_env(path, parameters), **(env or {})}
     guarded = None if is_committed() else committed_files()
     loop = ensure_event_loop()
     log_path = executed_dir() / f"{path.stem}.kernel.log"

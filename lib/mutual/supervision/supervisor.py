@@ -27,15 +27,14 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from .dubins import SPEED, _check_positive, _real, check_states
+from .dubins import SPEED, _check_positive, _real, check_states, wrap_angle
 from .value_function import ValueFunction
 
 REQUIRED_COLUMNS = ("participant", "trial", "time", "x", "y", "theta")
 OPTIONAL_COLUMNS = ("obstacle_x", "obstacle_y")
 
 
-def _wrap(theta):
-    return (np.asarray(theta, dtype=float) + np.pi) % (2 * np.pi) - np.pi
+_wrap = wrap_angle
 
 
 def _check_rng(rng):
