@@ -17,20 +17,29 @@ import textwrap
 import nbformat
 import pytest
 from mutual.compendium.audit import NotebookCode, Unresolved
-from mutual.compendium.claims import VERDICTS, load_claims, rule_problems, verdict
+from mutual.compendium.claims import VERDICTS, load_claims, load_settings, rule_problems, verdict
 from mutual.compendium.paths import FIGURES, NOTEBOOKS, ROOT
 from mutual.compendium.report import README_BEGIN, README_END, summary_counts
 from mutual.compendium.results import resolve_computed_by
 
 CLAIMS = load_claims()
 BASIS = dict(zip(CLAIMS["id"], CLAIMS["basis"]))
-CHECKED = ("computed", "thesis-numbers", "undetermined")  # original-data rows show simulated values only
+CHECKED = ("computed", "independent", "thesis-numbers", "construction", "undetermined")  # original-data rows: simulated
 CHAPTERS = sorted(p.stem for p in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb") if not p.name.startswith("00_"))
 
 
 
 def _report(stem, problems):
     assert not problems, f"notebook {stem}:\n  " + "\n  ".join(problems)
+
+
+def test_every_claim_names_its_thesis_lines():
+    assert not [cid for cid, lines in zip(CLAIMS["id"], CLAIMS["lines"]) if not lines.strip()], (
+        "claims without their thesis lines (column 'lines' of data/paper_claims.csv)")
+
+
+def test_settings_name_the_lines_that_fix_them():
+    assert len(load_settings())
 
 
 @pytest.mark.parametrize("claim", CLAIMS.to_dict("records"), ids=list(CLAIMS["id"]))
@@ -46,7 +55,7 @@ def test_every_value_fits_its_claims_basis_and_rule(stem, executed_notebook):
     problems = []
     for cid, entry in sorted(executed_notebook(stem).items()):
         try:
-            verdict(claims.loc[cid].to_dict() | {"id": cid}, entry["value"])
+            verdict(claims.loc[cid].to_dict() | {"id": cid}, entry["value"], entry.get("scan"))
         except ValueError as err:
             problems.append(str(err))
     _report(stem, problems)

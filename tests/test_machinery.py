@@ -83,21 +83,30 @@ def test_figure_and_table_names_are_checked(tmp_path, monkeypatch):
 
 
 CLAIMS = pd.DataFrame([
-    {"id": "c9-abs", "chapter": "9", "section": "9.1", "statement": "x is 0.29", "thesis_value": "0.29",
+    {"id": "c9-abs", "chapter": "9", "section": "9.1", "lines": "10", "statement": "x is 0.29", "thesis_value": "0.29",
      "compare": "abs:0.02", "basis": "computed", "figure": "fig_9_1"},
-    {"id": "c9-ge", "chapter": "9", "section": "9.1", "statement": "over 97%", "thesis_value": "0.97",
+    {"id": "c9-ge", "chapter": "9", "section": "9.1", "lines": "11", "statement": "over 97%", "thesis_value": "0.97",
      "compare": ">=", "basis": "computed", "figure": ""},
-    {"id": "c9-true", "chapter": "9", "section": "9.2", "statement": "nesting holds", "thesis_value": "true",
-     "compare": "true", "basis": "computed", "figure": ""},
-    {"id": "c9-human", "chapter": "9", "section": "9.3", "statement": "F(2, 20) = 8.72", "thesis_value": "8.72",
-     "compare": "none", "basis": "original-data", "figure": ""},
-    {"id": "c9-pending", "chapter": "9", "section": "9.3", "statement": "later", "thesis_value": "1",
+    {"id": "c9-true", "chapter": "9", "section": "9.2", "lines": "12", "statement": "Lemma 9.2.1 holds",
+     "thesis_value": "true", "compare": "true", "basis": "independent", "figure": ""},
+    {"id": "c9-count", "chapter": "9", "section": "9.2", "lines": "13", "statement": "the counter gives T|X|^2",
+     "thesis_value": "true", "compare": "true", "basis": "construction", "figure": ""},
+    {"id": "c9-human", "chapter": "9", "section": "9.3", "lines": "14", "statement": "F(2, 20) = 8.72",
+     "thesis_value": "8.72", "compare": "none", "basis": "original-data", "figure": ""},
+    {"id": "c9-pending", "chapter": "9", "section": "9.3", "lines": "15", "statement": "later", "thesis_value": "1",
      "compare": "rel:0.1", "basis": "computed", "figure": ""},
-    {"id": "c9-p-from-f", "chapter": "9", "section": "9.3", "statement": "p = 0.002", "thesis_value": "0.002",
-     "compare": "abs:0.0005", "basis": "thesis-numbers", "figure": ""},
-    {"id": "c9-open", "chapter": "9", "section": "9.4", "statement": "three times longer", "thesis_value": "3",
-     "compare": "range", "basis": "undetermined", "figure": ""},
+    {"id": "c9-p-from-f", "chapter": "9", "section": "9.3", "lines": "16", "statement": "p = 0.002",
+     "thesis_value": "0.002", "compare": "abs:0.0005", "basis": "thesis-numbers", "figure": ""},
+    {"id": "c9-open", "chapter": "9", "section": "9.4", "lines": "17", "statement": "three times longer",
+     "thesis_value": "3", "compare": "range", "basis": "undetermined", "figure": ""},
 ])
+SETTINGS = pd.DataFrame([{"id": "s9-n", "chapter": "9", "section": "9.1", "lines": "9", "setting": "demonstrations",
+                          "value": "100", "used_in": "09_demo"}])
+
+
+def scan(seeds=(10, 10), settings=(4, 4), flips=""):
+    return {"table": "table_9_scan", "seeds": None if seeds is None else list(seeds), "settings": list(settings),
+            "flips": flips}
 
 
 @pytest.fixture
@@ -107,6 +116,8 @@ def claims_file(tmp_path, monkeypatch):
     path = tmp_path / "claims.csv"
     CLAIMS.to_csv(path, index=False)
     monkeypatch.setattr(paths, "CLAIMS", path)
+    SETTINGS.to_csv(tmp_path / "settings.csv", index=False)
+    monkeypatch.setattr(paths, "SETTINGS", tmp_path / "settings.csv")
     monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(tmp_path / "figures"))
     notebook = _notebook(tmp_path, "quick = False", "x = 1", name="09_demo")
     for key, value in runs.kernel_env(notebook, {}).items():
@@ -118,31 +129,53 @@ def entry(value, note="n = 50", by="mutual.study.stats.rm_anova", **more):
     return {"value": value, "note": note, "computed_by": by, **more}
 
 
-@pytest.mark.parametrize("cid, got, expected", [
-    ("c9-abs", 0.30, "reproduced"), ("c9-abs", 0.35, "differs"), ("c9-ge", 0.98, "reproduced"),
-    ("c9-ge", 0.90, "differs"), ("c9-true", True, "reproduced"), ("c9-true", False, "differs"),
-    ("c9-human", 3.1, "not reproducible without the original data"), ("c9-pending", None, "pending"),
-    ("c9-p-from-f", 0.0021, "consistent"), ("c9-p-from-f", 0.01, "differs"), ("c9-open", [1.5, 4.0], "undetermined"),
+@pytest.mark.parametrize("cid, got, sweep, expected", [
+    ("c9-abs", 0.30, scan(), "reproduced"), ("c9-abs", 0.35, scan((0, 10), (0, 4)), "differs"),
+    ("c9-abs", 0.30, scan((8, 10)), "undetermined"), ("c9-abs", 0.30, scan(settings=(3, 4)), "undetermined"),
+    ("c9-abs", 0.35, scan((0, 10), (1, 4)), "undetermined"), ("c9-abs", 0.30, scan((9, 10)), "reproduced"),
+    ("c9-abs", 0.30, scan((2, 2)), "undetermined"),
+    ("c9-ge", 0.98, scan(None, (1, 1)), "reproduced"), ("c9-ge", 0.90, scan(None, (0, 1)), "differs"),
+    ("c9-true", True, None, "verified"), ("c9-true", False, None, "differs"),
+    ("c9-count", True, None, "holds by construction"),
+    ("c9-human", 3.1, None, "not reproducible without the original data"), ("c9-pending", None, None, "pending"),
+    ("c9-p-from-f", 0.0021, None, "consistent"), ("c9-p-from-f", 0.01, None, "differs"),
+    ("c9-open", [1.5, 4.0], None, "undetermined"),
 ])
-def test_verdicts(cid, got, expected):
+def test_verdicts(cid, got, sweep, expected):
     row = CLAIMS.set_index("id").loc[cid].to_dict() | {"id": cid}
-    assert verdict(row, got) == expected
+    assert verdict(row, got, sweep) == expected
+
+
+@pytest.mark.parametrize("sweep, message", [
+    (None, "needs its scan"), (scan(settings=(5, 4)), "holding, total"), (scan((1, 0)), "holding, total"),
+    ({"seeds": [10, 10], "settings": [1, 1]}, "needs 'table'"), (scan() | {"seed": 3}, "needs 'table'"),
+])
+def test_a_computed_claim_needs_a_valid_scan(sweep, message):
+    row = CLAIMS.set_index("id").loc["c9-abs"].to_dict() | {"id": "c9-abs"}
+    with pytest.raises(ValueError, match=message):
+        verdict(row, 0.3, sweep)
+
+
+def test_a_failing_check_of_our_own_code_stops_the_report():
+    row = CLAIMS.set_index("id").loc["c9-count"].to_dict() | {"id": "c9-count"}
+    with pytest.raises(ValueError, match="a bug of ours"):
+        verdict(row, False)
 
 
 def test_report_lists_every_claim_with_its_verdict(claims_file):
-    write_results("09_demo", {"c9-abs": entry(0.3), "c9-ge": entry(0.99), "c9-true": entry(True),
+    write_results("09_demo", {"c9-abs": entry(0.3, scan=scan()), "c9-ge": entry(0.99, scan=scan(None, (1, 1))),
+                              "c9-true": entry(True), "c9-count": entry(True),
                               "c9-human": entry(4.0, simulated=True), "c9-p-from-f": entry(0.0021),
                               "c9-open": entry([1.5, 4.0])})
     text = build_report().read_text()
     rows = {line.split(" | ")[0].strip("| "): line for line in text.splitlines() if line.startswith("| c9-")}
     assert set(rows) == set(CLAIMS["id"])
     assert "| reproduced |" in rows["c9-abs"] and "| pending |" in rows["c9-pending"]
+    assert "| verified |" in rows["c9-true"] and "10/10 seeds; 4/4 settings (`table_9_scan`)" in rows["c9-abs"]
     assert "0.99 (n = 50; mutual.study.stats.rm_anova)" in rows["c9-ge"]
-    assert "| not reproducible without the original data | yes |" in rows["c9-human"]
-    assert "| consistent |" in rows["c9-p-from-f"] and "| undetermined |" in rows["c9-open"]
-    assert ("Summary: 3 reproduced, 1 consistent, 0 differs, 1 undetermined, 1 not reproducible without the original "
-            "data, 1 pending (of 7 claims).") in text
-    assert "Not the committed report" not in text  # a full run
+    own = text.split("## Holds by construction", 1)[1].split("## Settings", 1)[0]
+    assert "c9-count" in own and "c9-count" not in text.split("## Holds by construction", 1)[0].split("Summary")[1]
+    assert "| s9-n | 9.1 | 9 | demonstrations | 100 | 09_demo |" in text.split("## Settings the thesis fixes")[1]
 
 
 def test_unknown_claim_id_is_an_error(claims_file, tmp_path):
@@ -237,7 +270,7 @@ def test_rules_must_fit_their_basis():
 
 def test_extensions_are_reported_apart_from_the_verdicts(claims_file):
     from mutual.compendium.results import write_extensions
-    write_results("09_demo", {"c9-abs": entry(0.3)})
+    write_results("09_demo", {"c9-abs": entry(0.3, scan=scan())})
     write_extensions("09_demo", {"power-n80": {"statement": "N for 80% power", "value": 14,
                                                "computed_by": "mutual.study.stats.rm_anova"}})
     text = build_report().read_text()

@@ -18,6 +18,7 @@ BUILD = ROOT / "build"
 FIGURES = ROOT / "figures"          # the committed outputs, written by `make figures` only
 SCRATCH = BUILD / "scratch"         # every other run's outputs (git-ignored)
 CLAIMS = DATA / "paper_claims.csv"
+SETTINGS = DATA / "paper_settings.csv"
 CACHE = ROOT / ".cache"
 OUTPUT_ENV = "MUTUAL_OUTPUT_DIR"
 

@@ -16,9 +16,32 @@ import numbers
 import numpy as np
 
 from ..atomic import write_text
-from .claims import load_claims
+from .claims import check_scan, load_claims
 from .paths import results_dir, saved
 from .runs import run_record
+
+
+ROUNDOFF = 1e-12   # below this a difference of float64 results is rounding, not a result
+
+
+def roundoff(value, floor=ROUNDOFF, fmt=".2g"):
+    """``value`` as text that reads the same on every machine: ``"< 1e-12"`` when its magnitude is
+    below ``floor`` (rounding noise, whose digits change with the CPU, the BLAS kernels and the
+    thread count), else ``format(value, fmt)``. For gaps, residuals and checks that should be zero,
+    in notes, tables and printed lines; ``floor`` sits well above the noise of the computation
+    (``ROUNDOFF`` for float64 identities; a solver's tolerance for an optimiser's answer).
+    NaN and infinity are refused (a check that produced them did not hold)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f"roundoff: value must be a real number, got {value!r}")
+    if not math.isfinite(value) or not (isinstance(floor, numbers.Real) and math.isfinite(floor) and floor > 0):
+        raise ValueError(f"roundoff: value and floor must be finite (floor > 0), got {value!r} and {floor!r}")
+    if abs(value) < floor:
+        text = f"{floor:g}"
+        if "e" in text:
+            mantissa, exponent = text.split("e")
+            text = f"{mantissa}e{int(exponent)}"
+        return f"< {text}"
+    return format(float(value), fmt)
 
 
 def _plain(value):
@@ -37,6 +60,15 @@ def _plain(value):
     if isinstance(value, (list, tuple, np.ndarray)):
         return [_plain(v) for v in np.asarray(value).tolist()]
     raise ValueError(f"result value {value!r} is not a number, boolean, string or list")
+
+
+def _plain_scan(cid, scan):
+    """A claim's scan (:func:`mutual.compendium.claims.check_scan`) as JSON values."""
+    if not isinstance(scan, dict):
+        check_scan(cid, scan)
+    scan = {k: (_plain(v) if k in ("seeds", "settings") and v is not None else v) for k, v in scan.items()}
+    scan.setdefault("flips", "")
+    return check_scan(cid, scan)
 
 
 def import_dotted(dotted):
@@ -87,8 +119,9 @@ def write_results(notebook, claims, simulated=False):
 
     Each entry is a dict with ``value``, ``computed_by`` (the dotted name of the library function
     that computed the value, e.g. ``mutual.constraints.inference.greedy_inference``; the notebook
-    calls it), ``note`` (the computation: what was compared, on what) and optionally ``simulated``
-    (overriding the default for the whole notebook). ``notebook`` is the notebook's file stem.
+    calls it), ``note`` (the computation: what was compared, on what), optionally ``simulated``
+    (overriding the default for the whole notebook) and, for a ``computed`` claim, ``scan``: the
+    scan over what the thesis leaves open (:func:`mutual.compendium.claims.check_scan`). ``notebook`` is the notebook's file stem.
     Unknown claim ids and entries that do not name their computation raise a ValueError.
     """
     known = set(load_claims()["id"])
@@ -99,15 +132,17 @@ def write_results(notebook, claims, simulated=False):
         if not isinstance(entry, dict):
             raise ValueError(f"notebook {notebook}, claim {cid!r}: the entry must be a dict with 'value', "
                              f"'computed_by' and 'note', got {entry!r}")
-        unknown = set(entry) - {"value", "simulated", "note", "computed_by"}
+        unknown = set(entry) - {"value", "simulated", "note", "computed_by", "scan"}
         if unknown or "value" not in entry:
             raise ValueError(f"notebook {notebook}, claim {cid!r}: entry needs 'value', 'computed_by' and 'note' "
-                             f"and may carry 'simulated', got {sorted(entry)}")
+                             f"and may carry 'simulated' and 'scan', got {sorted(entry)}")
         _check_provenance(notebook, cid, entry)
         entries[cid] = {"value": _plain(entry["value"]),
                         "simulated": bool(entry.get("simulated", simulated)),
                         "note": str(entry["note"]),
                         "computed_by": str(entry["computed_by"])}
+        if entry.get("scan") is not None:
+            entries[cid]["scan"] = _plain_scan(cid, entry["scan"])
     doc = {"notebook": notebook, "run": run_record(notebook), "claims": entries}
     return saved(write_text(results_dir() / f"{notebook}.json", json.dumps(doc, indent=1, sort_keys=True) + "\n"))
 
