@@ -15,6 +15,7 @@ import pytest
 
 import mutual
 from mutual.cli import common, main
+from mutual.cache import CacheWarning
 from mutual.study import sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -121,7 +122,7 @@ def test_a_planted_pickle_is_never_loaded(tmp_path):
     for t in range(4):
         (cache.folder / f"{cache.key({'t': t})}.pkl").write_bytes(planted)
         cache.path({"t": t}).write_bytes(planted)          # the same bytes where a result should be
-    with pytest.warns(sweep.TaskCacheWarning, match="does not verify"):
+    with pytest.warns(CacheWarning, match="does not verify"):
         results, stats = _sweep(cache)
     assert not marker.exists() and stats.computed == 4
     assert _sweep(cache)[1].cached == 4                    # healed: the planted files were replaced
@@ -147,7 +148,7 @@ def test_a_forged_entry_is_healed(forge, tmp_path):
     stored = json.loads(path.read_text())
     FORGED[forge](stored)
     path.write_text(json.dumps(stored))
-    with pytest.warns(sweep.TaskCacheWarning, match="does not verify"):
+    with pytest.warns(CacheWarning, match="does not verify"):
         again, stats = _sweep(cache, 1)
     assert stats.computed == 1
     pd.testing.assert_frame_equal(again[0], truth[0])
@@ -163,19 +164,27 @@ def test_results_read_back_exactly(tmp_path):
         pd.testing.assert_frame_equal(a, b)
 
 
-@pytest.mark.parametrize("broken", ["a directory where a file should be", "the cache folder is a file"])
-def test_a_cache_that_cannot_be_used_is_turned_off_with_one_warning(broken, tmp_path):
-    if broken.startswith("a directory"):
-        cache = sweep.TaskCache("v", tmp_path / "cache")
-        cache.path({"t": 0}).mkdir(parents=True)
-    else:
-        (tmp_path / "file").write_text("x")
-        cache = sweep.TaskCache("v", tmp_path / "file" / "power")
+def test_a_folder_where_a_result_should_be_heals(tmp_path):
+    cache = sweep.TaskCache("v", tmp_path / "cache")
+    cache.path({"t": 0}).mkdir(parents=True)
+    (cache.path({"t": 0}) / "inside").write_text("x")
+    results, stats = _sweep(cache)
+    assert stats.computed == 4 and not cache.disabled and cache.path({"t": 0}).is_file()
+    assert _sweep(cache)[1].cached == 4
+
+
+@pytest.mark.parametrize("broken", ["the cache folder is a file", "no home folder"])
+def test_a_cache_that_cannot_be_used_is_turned_off_with_one_warning(broken, tmp_path, monkeypatch):
+    (tmp_path / "file").write_text("x")
+    if broken == "no home folder":
+        monkeypatch.delenv("MUTUAL_CACHE_DIR", raising=False)
+        monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "file" / "cache"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        cache = sweep.TaskCache("v", tmp_path / "file" / "power" if broken.startswith("the cache") else None)
         results, stats = _sweep(cache)
     assert stats.computed == 4 and len(results) == 4 and cache.disabled
-    assert len([w for w in caught if issubclass(w.category, sweep.TaskCacheWarning)]) == 1
+    assert len([w for w in caught if issubclass(w.category, CacheWarning)]) == 1
 
 
 # ---- bounded work, errors that name the option -------------------------------------------------------

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from mutual.cache import CacheWarning
 from mutual.study import cohort
 from mutual.study import cohort_power as cp
 from mutual.study import power_summary as ps
@@ -140,7 +141,7 @@ def test_the_cache_resumes_an_interrupted_sweep(library, tasks, inline, tmp_path
     assert (stats.cached, stats.computed) == (2, 2)
     _same(results, inline)
     cache.path(tasks[3].params()).write_bytes(b'{"format": 1, "key": ')  # a torn file is recomputed
-    with pytest.warns(sweep.TaskCacheWarning, match="does not verify"):
+    with pytest.warns(CacheWarning, match="does not verify"):
         results, stats = sweep.run_tasks(cp.simulate_cohort, tasks, shared=library, cache=cache, scheduler="inline",
                                          progress=False)
     assert (stats.cached, stats.computed) == (3, 1)

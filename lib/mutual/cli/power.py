@@ -41,10 +41,10 @@ the chapter 5 study, on Dask).
                                                             to replicate it (default: the thesis's 8.72 2 20)
   (without --analytic-only or --f)                          also the SIMULATED power at --n
 
-Measured (figures/benchmarks.md, a shared 2.3 GHz 2-core machine): --f and --analytic-only about 2.3 s
+Measured (figures/benchmarks.md, a shared 2.3 GHz 2-core machine): --f and --analytic-only 1.8-2.4 s
 of CPU, nearly all of it importing scipy.stats and pandas, no JAX; the simulation about 3.5 s per cohort
 of 11 participants per core plus 8-16 s to start a LocalCluster, and about 12 s wall (mostly imports and
-loading the value functions) once its cohorts are cached.
+loading the value functions; 4.9 s of CPU) once its cohorts are cached.
 
 writes to --out:  power_gpower.csv (with --f) or power_plan.csv (--from-f); with the simulation also
                   power_simulated.csv, power_recommended.csv and power_curves.png

@@ -30,7 +30,7 @@ participant x trial x measure, so select a measure with --where measure=trips an
 participant's trials with --aggregate mean. Subject and level names are text exactly as written:
 01 and 1 are two subjects, NA and None are names; names that differ only in surrounding spaces are
 refused as ambiguous. Measured on the example (figures/benchmarks.md, a shared 2.3 GHz 2-core
-machine): about 3 s of CPU, 2.5 s of it importing scipy.stats, pandas and matplotlib; no JAX.
+machine): 2.5-3.3 s of CPU, most of it importing scipy.stats, pandas and matplotlib; no JAX.
 
 writes to --out:  anova_<name>.csv (the test), pairwise_<name>.csv (Tukey and Holm),
                   cells_<name>.csv (the subject x level table analysed),

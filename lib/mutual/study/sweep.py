@@ -30,7 +30,7 @@ from pathlib import Path
 from tqdm.auto import tqdm
 
 from ..atomic import atomic_path
-from ..cache import cache_dir
+from ..cache import CacheWarning, cache_folder, unusable, write_entry
 
 SCHEDULER_ENV = "MUTUAL_DASK_SCHEDULER"
 INLINE = "inline"
@@ -78,10 +78,6 @@ _COLUMN_TYPES = {"float64": (float, int), "int64": (int,), "bool": (bool,), "obj
                  "str": (str, type(None))}
 
 
-class TaskCacheWarning(UserWarning):
-    """A task cache file did not verify (it is recomputed), or the cache cannot be used (the sweep runs without it)."""
-
-
 class TaskCache:
     """Results of finished tasks in ``folder`` (default ``<cache dir>/power``), one JSON file per task,
     named by the hash of the task's parameters and ``version`` (the code that computes them).
@@ -89,17 +85,18 @@ class TaskCache:
     A result is a pandas DataFrame whose columns hold floats, whole numbers, booleans or text (None
     allowed); numbers are written exactly (JSON's shortest round-trip form). JSON cannot run code when
     it is read, and :meth:`get` checks what it reads: the format, the task's key, the column names and
-    every value's type. A file that does not verify is deleted with a :class:`TaskCacheWarning` and the
-    task recomputed (the cache heals). A folder that cannot be written, or a directory where a file
-    should be, turns the cache off for the rest of the sweep with one warning; the sweep goes on.
+    every value's type. A file that does not verify is deleted with a :class:`mutual.cache.CacheWarning`
+    and the task recomputed; a folder found where a file should be is removed when the result is written
+    (the cache heals). A cache folder that cannot be created or written turns the cache off for the
+    rest of the sweep with one warning (:mod:`mutual.cache`); the sweep goes on.
     """
 
     def __init__(self, version, folder=None):
         if not isinstance(version, str) or not version:
             raise ValueError(f"version must be a non-empty string, got {version!r}")
         self.version = version
-        self.folder = Path(folder) if folder is not None else cache_dir() / "power"
-        self.disabled = False
+        self.folder = Path(folder) if folder is not None else cache_folder("power")
+        self.disabled = self.folder is None
 
     def __repr__(self):
         return f"TaskCache({str(self.folder)!r}, version={self.version!r})"
@@ -112,16 +109,17 @@ class TaskCache:
         return self.folder / f"{self.key(params)}.json"
 
     def get(self, params):
-        """The cached result, or None: absent, or not verifying (then deleted and recomputed)."""
+        """The cached result, or None: absent, a folder in its place, or not verifying (then deleted)."""
         if self.disabled:
             return None
         path, key = self.path(params), self.key(params)
         try:
             text = path.read_text(encoding="utf-8")
-        except FileNotFoundError:
+        except (FileNotFoundError, IsADirectoryError, NotADirectoryError):
             return None
-        except (IsADirectoryError, PermissionError, NotADirectoryError) as err:
-            self._off(f"cannot read {path} ({err.strerror or err})")
+        except PermissionError as err:
+            self.disabled = True
+            unusable(self.folder, err)
             return None
         except (OSError, UnicodeDecodeError) as err:
             return self._heal(path, f"unreadable ({type(err).__name__})")
@@ -131,29 +129,21 @@ class TaskCache:
             return self._heal(path, str(err))
 
     def put(self, params, result):
-        """Store ``result`` (a DataFrame, see the class docstring); a write that fails turns the cache off."""
+        """Store ``result`` (a DataFrame, see the class docstring); a disk that refuses turns the cache off."""
         if self.disabled:
             return
         text = json.dumps(_frame_to(result, self.key(params), self.version, params), allow_nan=True)
-        try:
-            with atomic_path(self.path(params)) as tmp:
-                tmp.write_text(text, encoding="utf-8")
-        except OSError as err:
-            self._off(f"cannot write {self.path(params)} ({err.strerror or err})")
+        if write_entry(self.path(params), lambda tmp: tmp.write_text(text, encoding="utf-8")) is None:
+            self.disabled = True
 
     def _heal(self, path, reason):
-        warnings.warn(f"power cache file {path} does not verify: {reason}; recomputing it", TaskCacheWarning,
+        warnings.warn(f"power cache file {path} does not verify: {reason}; recomputing it", CacheWarning,
                       stacklevel=3)
         try:
             path.unlink()
         except OSError:
             pass
         return None
-
-    def _off(self, reason):
-        self.disabled = True
-        warnings.warn(f"the power cache is off for this sweep: {reason}; results are computed, not cached",
-                      TaskCacheWarning, stacklevel=3)
 
 
 def _frame_to(frame, key, version, params):
