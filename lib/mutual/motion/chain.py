@@ -112,12 +112,23 @@ class ChainGaussian:
             raise ValueError(f"{name} contains non-finite values (NaN or inf): the likelihood is undefined")
         return us
 
-    def linear_part(self, us):
-        """``rho_t = L_t'(u_t - K_t x_t)`` (N, m), with ``x`` the rollout of ``us``: the whitened residual
-        is ``rho - L'k``."""
-        xs = rollout(self.A, self.B, self.c, self.x0, us)
+    def linear_part(self, us, xs=None):
+        """``rho_t = L_t'(u_t - K_t x_t)`` (N, m), with ``x`` the rollout of ``us`` (``xs`` if given): the
+        whitened residual is ``rho - L'k``."""
+        if xs is None:
+            xs = self.rollout(us)
         with np.errstate(over="ignore", invalid="ignore"):
             return np.einsum("tji,tj->ti", self.L, us - np.einsum("tij,tj->ti", self.K, xs[:-1]))
+
+    def rollout(self, us):
+        """The states (N+1, n) the policy feeds back on, reached by the controls ``us``."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            return rollout(self.A, self.B, self.c, self.x0, us)
+
+    def same_dynamics(self, other):
+        """Do ``self`` and ``other`` feed back on the same states (same dynamics and start)?"""
+        return all(a is b or np.array_equal(a, b) for a, b in
+                   ((self.A, other.A), (self.B, other.B), (self.c, other.c), (self.x0, other.x0)))
 
     def stage_logliks(self, us, name="us"):
         """``log N(u_t; K_t x_t + k_t, Q_uu,t^-1)`` for each stage (N,); their running sums are the
@@ -186,8 +197,9 @@ def log_ratio_prefix(us, gaussian0, gaussian1, name="us"):
     as ``-1/2 (r0 - r1).(r0 + r1)`` per stage (module docstring): exact where the squares are not."""
     us = gaussian0.check_controls(us, name)
     gaussian1.check_controls(us, name)
+    xs = gaussian0.rollout(us) if gaussian0.same_dynamics(gaussian1) else None
     with np.errstate(over="ignore", invalid="ignore"):
-        rho0, rho1 = gaussian0.linear_part(us), gaussian1.linear_part(us)
+        rho0, rho1 = gaussian0.linear_part(us, xs), gaussian1.linear_part(us, xs)
         diff = (rho0 - rho1) - (gaussian0._e - gaussian1._e)
         total = (rho0 - gaussian0._e) + (rho1 - gaussian1._e)
         terms = -0.5 * np.sum(diff * total, axis=1) + (gaussian0.half_logdets - gaussian1.half_logdets)

@@ -10,7 +10,6 @@ route of Theorem 6.4.2 (:func:`likelihood_ratio_minimiser`) and sampling; they r
 allocating, sizes beyond :data:`mutual.motion.chain.DENSE_LIMIT_BYTES`."""
 
 import numpy as np
-from scipy.special import log_softmax
 
 from .chain import check_dense_size, log_ratio_prefix, lq_chains
 
@@ -156,8 +155,9 @@ def posterior_over_time(dynamics, costs, x0, us, prior=None):
         log_prior = np.log(p / p.sum())
     us = _check_controls(dynamics, us)
     chains = lq_chains(dynamics, costs, x0, len(us))
-    logs = np.stack([-log_ratio_prefix(us, chains[0], g) for g in chains], axis=1)   # log P_i - log P_0
-    return np.exp(log_softmax(logs + log_prior, axis=1))
+    logs = np.stack([-log_ratio_prefix(us, chains[0], g) for g in chains], axis=1) + log_prior  # log P_i - log P_0
+    top = logs.max(axis=1, keepdims=True)
+    return np.exp(logs - top - np.log(np.exp(logs - top).sum(axis=1, keepdims=True)))      # log-sum-exp
 
 
 def likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0):
