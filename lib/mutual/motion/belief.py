@@ -60,7 +60,8 @@ def check_prior(prior):
 
 
 def _dense_terms(us, mean, precision):
-    """Per-coordinate ``(z, log L_jj)`` of a dense Gaussian (module docstring), ``z = L^-1 (u - mu)``."""
+    """``(L^-1 u, L^-1 mu, log L_jj)`` of a dense Gaussian (module docstring): ``z = L^-1 u - L^-1 mu``,
+    its two parts apart so that a ratio of two Gaussians with one factor ``L`` cancels ``L^-1 u`` exactly."""
     us, mean = np.asarray(us, float), np.asarray(mean, float)
     if us.ndim != 2 or us.shape != mean.shape:
         raise ValueError(f"us and mean must be (N, m) arrays of the same shape, got {us.shape} and {mean.shape}")
@@ -69,8 +70,8 @@ def _dense_terms(us, mean, precision):
     N, m = us.shape
     P = _precision("precision", precision, N * m)
     L = np.linalg.cholesky(np.linalg.inv(P))
-    z = np.linalg.solve(L, (us - mean).ravel()) if N * m else np.zeros(0)
-    return z, np.log(np.diag(L))
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.linalg.solve(L, us.ravel()), np.linalg.solve(L, mean.ravel()), np.log(np.diag(L))
 
 
 def gaussian_prefix_loglik(us, gaussian, precision=None):
@@ -85,20 +86,24 @@ def gaussian_prefix_loglik(us, gaussian, precision=None):
         return gaussian.prefix_loglik(us)
     if precision is None:
         raise ValueError("gaussian must be a ChainGaussian, or a mean (N, m) given with its precision")
-    z, log_diag = _dense_terms(us, gaussian, precision)
+    zu, zm, log_diag = _dense_terms(us, gaussian, precision)
     N, m = np.shape(us)
-    terms = -0.5 * z ** 2 - log_diag - 0.5 * np.log(2 * np.pi)
-    return np.concatenate([[0.0], np.cumsum(terms.reshape(N, m).sum(axis=1))])
+    with np.errstate(over="ignore", invalid="ignore"):
+        terms = -0.5 * (zu - zm) ** 2 - log_diag - 0.5 * np.log(2 * np.pi)
+        out = np.concatenate([[0.0], np.cumsum(terms.reshape(N, m).sum(axis=1))])
+    if not np.all(np.isfinite(out)):
+        raise NotRepresentable("us: log N(u) of these controls is beyond float64's range")
+    return out
 
 
 def _log_ratio(us, gaussian0, gaussian1):
     """``log N0(u_{0:t}) - log N1(u_{0:t})`` (N+1,), as ``-1/2 (z0 - z1).(z0 + z1)`` plus log-determinants."""
     if isinstance(gaussian0, ChainGaussian) and isinstance(gaussian1, ChainGaussian):
         return log_ratio_prefix(us, gaussian0, gaussian1)
-    (z0, d0), (z1, d1) = (_dense_terms(us, *g) for g in (gaussian0, gaussian1))
+    (u0, m0, d0), (u1, m1, d1) = (_dense_terms(us, *g) for g in (gaussian0, gaussian1))
     with np.errstate(over="ignore", invalid="ignore"):
-        out = np.concatenate([[0.0], np.cumsum((-0.5 * (z0 - z1) * (z0 + z1) - d0 + d1)
-                                               .reshape(len(us), -1).sum(axis=1))])
+        diff, total = (u0 - u1) - (m0 - m1), (u0 - m0) + (u1 - m1)
+        out = np.concatenate([[0.0], np.cumsum((-0.5 * diff * total - d0 + d1).reshape(len(us), -1).sum(axis=1))])
     if not np.all(np.isfinite(out)):
         raise NotRepresentable("us: the log-likelihood ratio of these controls is beyond float64's range")
     return out

@@ -45,7 +45,7 @@ _KEYS = {"dynamics", "start", "goal", "distractors", "horizon", "steps", "alpha"
          "effort_weight", "speed", "anticipation"}
 _ANTICIPATION_KEYS = {"alpha_start", "alpha_end", "every"}
 MAX_STEPS = 10_000
-BYTES_PER_STEP = 1_000          # per step and hypothesis: the motions, Riccati gains, observer factors (measured)
+BYTES_PER_STEP = 400            # per step and hypothesis: motions, gains, observer factors (measured 190-360 B)
 # Every magnitude of a spec (a coordinate, a weight, dt, alpha, |eta|, speed) lies within [1e-50, 1e50], so that the
 # products the solvers form (squared distances times weights over time steps, the legible weights, ...) stay well
 # inside float64's range (~1e308); alpha >= 1e-6, since (1 + alpha) J1 - J0 keeps only alpha's share of the
@@ -193,10 +193,10 @@ def legible_spec(mapping, source="spec"):
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         _fail(source, "steps", f"must be an integer in 1..{MAX_STEPS}, got {_shown(steps)}")
     if steps > MAX_STEPS:
-        need = steps * BYTES_PER_STEP * (2 + len(distractors))
+        many = float(min(steps, 10 ** 300))
         _fail(source, "steps", f"must be an integer in 1..{MAX_STEPS}, got {_shown(steps)}: its motions, Riccati "
-              f"gains and observer factors would need about {need / 2 ** 30:.3g} GiB, and a solve would take "
-              f"{steps / MAX_STEPS:.3g} times the few seconds {MAX_STEPS} steps take")
+              f"gains and observer factors would need about {many * BYTES_PER_STEP * (2 + len(distractors)) / 2 ** 30:.3g}"
+              f" GiB, and a solve would take {many / MAX_STEPS:.3g} times the few seconds {MAX_STEPS} steps take")
     has_alpha, has_eta = "alpha" in d, "eta" in d
     if has_alpha == has_eta:
         _fail(source, "alpha", "give exactly one of alpha (eq. 6.15) and eta (the QP of section 6.5)")
