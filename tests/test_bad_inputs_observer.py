@@ -186,6 +186,8 @@ REFUSED = [
     ("eta -1e40, one distractor", spec(alpha=None, eta=-1e40), "eta"),
     ("speed 1e-300", spec(**DUBINS, speed=1e-300), "speed"),
     ("heading 1e10 rad", spec(dynamics="dubins", start=[0.0, 0.0, 1e10]), "start"),
+    ("car reach 3, goals 1.4e40 away", spec(**DUBINS, goal=[1e40, 1e40], distractors=[[-1e40, 1e40]]), "goal"),
+    ("car reach 1e40, goals 1.4 away", spec(**DUBINS, speed=1e40), "speed"),
     # NaN and infinity in each key
     *[(f"{bad} in {key}", spec(**{key: value}), name) for bad, v in (("nan", float("nan")), ("inf", float("inf")))
       for key, value, name in (("start", [v, 0.0], "start"), ("goal", [1.0, v], "goal"),

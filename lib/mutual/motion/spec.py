@@ -55,6 +55,7 @@ MAGNITUDE = 1e50
 ALPHA_MIN = 1e-6
 SEPARATION_RTOL = 1e-9
 HEADING_MAX = 1e6               # |theta| (rad): beyond it float64 resolves an angle to worse than 1e-10 rad
+REACH_RATIO = 1e9               # the Dubins car's reach and the goals' distance: within this factor of each other
 
 
 @dataclass(frozen=True)
@@ -131,6 +132,18 @@ def _within(source, key, value, low, high, why):
         _fail(source, key, f"must lie within [{low:g}, {high:g}] in magnitude, got {value:.6g}: {why}")
 
 
+def _check_reach(source, spec, goals):
+    """The car's reach ``speed * horizon`` and the goals' distance from the start within :data:`REACH_RATIO` of
+    each other: beyond, a turn changes the costs by less than iLQR's stopping test resolves (relative 1e-12)."""
+    reach = spec.speed * spec.horizon
+    key, far = max(((k, math.dist(p, spec.start[:2])) for k, p in goals), key=lambda kp: kp[1])
+    if far > REACH_RATIO * reach or reach > REACH_RATIO * far:
+        blame = key if far > reach else "speed"
+        _fail(source, blame, f"the car's reach speed x horizon = {reach:.3g} and the goals' distance {far:.3g} from "
+              f"the start differ by more than {REACH_RATIO:g} times: a turn would change the costs by less than "
+              "iLQR's stopping test resolves (relative 1e-12 of the cost)")
+
+
 def _check_magnitudes(source, spec):
     """Refuse a spec whose numbers would take the solvers beyond float64 (see :data:`MAGNITUDE`), naming the key."""
     points = [("start", spec.start[:2]), ("goal", spec.goal)] + [(f"distractors[{i}]", p)
@@ -160,6 +173,8 @@ def _check_magnitudes(source, spec):
         _within(source, key, a, ALPHA_MIN, MAGNITUDE, rounding if a < ALPHA_MIN else small)
     if spec.eta is not None:
         _within(source, "eta", spec.eta, 0.0, MAGNITUDE, "a bound on J1 - J0 (nats) beyond float64's reach")
+    if spec.dynamics == "dubins":
+        _check_reach(source, spec, points[1:])
 
 
 def legible_spec(mapping, source="spec"):
@@ -268,12 +283,15 @@ def solve_legible(spec):
 
 
 def _solve_single_integrator(spec):
-    """LQR, receding horizon or the QP, with the observer's Gaussians (eq. 6.8) of the goal and of each
-    distractor from one banded factorisation (:mod:`mutual.motion.chain`); the goal's mode is the
-    predictable motion."""
-    from . import legible as leg
+    """LQR, receding horizon or the QP, from one banded factorisation of the observer's Gaussians (eq. 6.8)
+    for the goal and each distractor (:mod:`mutual.motion.chain`): the goal's mode is the predictable
+    motion, and since the hypotheses share their quadratic part (eq. (6.17) with common weights), the
+    goal's gains with the mean of the distractors' feedforwards give every legible and anticipative
+    replan (:func:`mutual.motion.legible.objective.shared_quadratic_gains`)."""
     from .chain import log_ratio_prefix, lq_chains, rollout
-    dyn = leg.single_integrator(2, spec.dt)
+    from .legible.objective import linear_alpha_schedule, mixed_feedforward, policy_rollout, scheduled_alphas
+    from .legible.problem import single_integrator
+    dyn = single_integrator(2, spec.dt)
     x0, N = np.array(spec.start), spec.steps
     J1, J0s = _costs(spec)
     goal, *others = lq_chains(dyn, [J1] + J0s, x0, N)
@@ -281,14 +299,12 @@ def _solve_single_integrator(spec):
     out = {"method": spec.method}
     if spec.method == "qp":
         xs, us, out["duals"] = _qp(spec, dyn, J1, J0s, x0, predictable)
-    elif spec.method == "receding-horizon":
-        lo, hi, every = spec.anticipation
-        xs, us, out["alphas"] = leg.receding_horizon(dyn, J1, leg.distractor_mixture(J0s), x0, N,
-                                                     leg.linear_alpha_schedule(lo, hi), every)
     else:
-        sol = leg.legible_trajectory(dyn, J1, J0s, x0, N, spec.alpha)     # J0: the distractors' mean
-        xs, us = sol.xs, sol.us
-        out["alphas"] = np.full(N, spec.alpha)
+        alphas = np.full(N, spec.alpha) if spec.anticipation is None else \
+            scheduled_alphas(linear_alpha_schedule(*spec.anticipation[:2]), N, spec.anticipation[2])
+        distractors = np.mean([other.k for other in others], axis=0)          # J0: the distractors' mean
+        xs, us = policy_rollout(dyn, x0, goal.K, mixed_feedforward(goal.k, distractors, 1.0 + alphas, 1.0))
+        out["alphas"] = alphas
     out["legible"], out["predictable"] = (xs, us), predictable
     out["evidence"] = {name: [float(log_ratio_prefix(u, other, goal, name=f"the {name} motion")[-1])
                               for other in others]
@@ -297,36 +313,37 @@ def _solve_single_integrator(spec):
     return out
 
 
+def evidence_gaps(spec, p):
+    """``J1 - J0_i`` for each distractor at the end point ``p`` (eq. (6.17): the effort cancels), as
+    ``2 w_T (g0i - g1).(p - (g0i + g1) / 2)``: no difference of two large squares."""
+    g1, p = np.array(spec.goal), np.asarray(p, float)[:2]
+    return np.array([2 * spec.terminal_weight * (g0 - g1) @ (p - (g0 + g1) / 2) for g0 in np.array(spec.distractors)])
+
+
 def eta_bound(spec):
-    """The smallest ``eta`` any motion can meet: ``min_p max_i J1 - J0_i`` over the end point ``p`` (for
-    eq. (6.17) the effort cancels in ``J1 - J0_i = w_T (|p - g1|^2 - |p - g0i|^2)``, affine in ``p``, and
-    every ``p`` is reachable). A linear program; ``-inf`` when no bound holds (the distractors do not
-    surround the goal)."""
+    """The smallest ``eta`` any motion can meet: ``min_p max_i J1 - J0_i`` over the end point ``p`` (every
+    ``p`` is reachable, and with ``q = p - g1``, ``d_i = g0i - g1`` each ``J1 - J0_i = w_T (2 d_i.q - |d_i|^2)``
+    is affine). A linear program; ``-inf`` when no bound holds (the distractors do not surround the goal)."""
     from scipy.optimize import linprog
-    g1, g0 = np.array(spec.goal), np.array(spec.distractors)
+    d = np.array(spec.distractors) - np.array(spec.goal)
     w = spec.terminal_weight
-    slopes = 2 * w * (g0 - g1)
-    offsets = w * (g1 @ g1 - np.einsum("ij,ij->i", g0, g0))
-    lp = linprog([0.0, 0.0, 1.0], A_ub=np.hstack([slopes, -np.ones((len(g0), 1))]), b_ub=-offsets,
-                 bounds=[(None, None)] * 3, method="highs")
+    lp = linprog([0.0, 0.0, 1.0], A_ub=np.hstack([2 * w * d, -np.ones((len(d), 1))]),
+                 b_ub=w * np.einsum("ij,ij->i", d, d), bounds=[(None, None)] * 3, method="highs")
     return -np.inf if lp.status == 3 else float(lp.fun)
 
 
 def _qp(spec, dyn, J1, J0s, x0, predictable):
     """The multi-distractor QP of section 6.5 for ``spec.eta``; a ValueError names ``eta`` when no motion
     meets it, or when the solver cannot."""
-    from .legible.qp import multi_distractor_qp
     bound = eta_bound(spec)
     if np.isfinite(bound) and not spec.eta > bound + 1e-9 * max(1.0, abs(bound)):
         raise ValueError(f"key 'eta': no motion meets J1 - J0_i <= eta = {spec.eta:g} for every distractor: the "
                          f"smallest bound any end point meets is {bound:.6g}, so eta must exceed it")
 
-    def gaps(xs, us):
-        return np.array([J1.value(xs, us) - J0.value(xs, us) for J0 in J0s])
-
-    loose = gaps(*predictable).max()
+    loose = evidence_gaps(spec, predictable[0][-1]).max()
     if loose <= spec.eta:                               # the constraints do not bind: the predictable motion
         return (*predictable, np.zeros(len(J0s)))
+    from .legible.qp import multi_distractor_qp          # cvxpy: imported only when the bound binds
     try:
         xs, us, duals = multi_distractor_qp(dyn, J1, J0s, x0, spec.steps, spec.eta)
     except ValueError:
@@ -335,7 +352,7 @@ def _qp(spec, dyn, J1, J0s, x0, predictable):
                          f"(the smallest bound any end point meets is {bound:.6g}): they lie about {reach:.3g} beyond "
                          f"the predictable one, farther than the solver resolves; choose an eta nearer the "
                          f"predictable motion's max J1 - J0_i = {loose:.6g}") from None
-    worst = gaps(xs, us).max()
+    worst = evidence_gaps(spec, xs[-1]).max()
     if not worst <= spec.eta + 1e-6 * max(1.0, abs(spec.eta), abs(bound) if np.isfinite(bound) else 0.0):
         raise ValueError(f"key 'eta': the QP solver returned a motion with J1 - J0 = {worst:.6g} > eta = "
                          f"{spec.eta:g}: eta = {spec.eta:g} is too close to what any motion can meet ({bound:.6g})")

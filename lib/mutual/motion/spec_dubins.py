@@ -59,9 +59,9 @@ def solve_dubins(spec):
     legible = best_ilqr(spec, params(spec, (1 + a) * wT, wT / K, a * wu))
     plain = best_ilqr(spec, params(spec, wT, 0.0, wu))
 
-    def difference(xs):         # J1 - J0_i per distractor (effort cancels)
-        p = xs[-1, :2]
-        return [float(wT * (np.sum((p - spec.goal) ** 2) - np.sum((p - g) ** 2))) for g in np.array(spec.distractors)]
+    def difference(xs):         # J1 - J0_i per distractor (effort cancels), without squaring large numbers
+        g1, p = np.array(spec.goal), xs[-1, :2]
+        return [float(2 * wT * (g0 - g1) @ (p - (g0 + g1) / 2)) for g0 in np.array(spec.distractors)]
 
     return {"method": "ilqr", "legible": (legible.xs, legible.us), "predictable": (plain.xs, plain.us),
             "alphas": np.full(spec.steps, a), "evidence_kind": "J1 - J0",
