@@ -254,11 +254,12 @@ def riccati_factor(A, B, Hz, gz, VN, vN, what="the cost"):
     n, m = B.shape[-2:]
     K, k, L = np.empty((P, N, m, n)), np.empty((P, N, m)), np.empty((P, N, m, m))
     V, v = np.array(VN, float), np.array(vN, float)
+    AB = np.concatenate([A, B], axis=2)
+    ABT = AB.transpose(0, 2, 1)
     with np.errstate(over="ignore", invalid="ignore"):
         for t in range(N - 1, -1, -1):
-            AB = np.concatenate([A[t], B[t]], axis=1)
-            Z = Hz[:, t] + AB.T @ (V @ AB)                              # [[Q_xx, Q_xu], [Q_ux, Q_uu]]
-            g = gz[:, t] + v @ AB
+            Z = Hz[:, t] + ABT[t] @ V @ AB[t]                            # [[Q_xx, Q_xu], [Q_ux, Q_uu]]
+            g = gz[:, t] + v @ AB[t]
             quu = Z[:, n:, n:]
             try:
                 L[:, t] = np.linalg.cholesky(quu)
