@@ -46,11 +46,15 @@ bench-quick:
 	$(MAKE) bench QUICK=1
 
 ## bench-peers: our solvers and statistics against crocoddyl (FDDP), CasADi + IPOPT and pingouin, in a
-##              separate pinned environment $(PEERS) (bench/peers/requirements.lock, about 1.5 GB; never
+##              separate pinned environment $(PEERS) (bench/peers/requirements.lock, about 2.5 GB; never
 ##              part of environment.lock); writes its own section of figures/benchmarks.md, which
-##              `make bench` keeps (and this keeps `make bench`'s); QUICK=1: small sizes, to build/bench/
+##              `make bench` keeps (and this keeps `make bench`'s); QUICK=1: small sizes, to build/bench/;
+##              JAX compiles into an empty cache (build/bench/peers-jax), so compile times are cold; the
+##              peers run on one OpenMP/BLAS thread (their fastest for these small problems here)
 bench-peers: $(PEERS_READY)
-	$(PEERS)/bin/python bench/run.py --peers $(if $(QUICK),--quick)
+	rm -rf build/bench/peers-jax
+	JAX_COMPILATION_CACHE_DIR=$(CURDIR)/build/bench/peers-jax OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
+		$(PEERS)/bin/python bench/run.py --peers $(if $(QUICK),--quick)
 
 ## lab: JupyterLab on notebooks/00_overview.ipynb with the kernel "mutual"; what you run there
 ##      writes to build/scratch/, never to figures/, and notebooks/ are saved without outputs

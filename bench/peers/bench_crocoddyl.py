@@ -11,11 +11,24 @@ unicycle.hxx``): dt = 0.1, cost weights (10, 1), one model for every running nod
 :func:`mutual.motion.trajopt.ilqr` from zero controls, with its default settings. FDDP runs with its
 defaults (``th_stop`` 1e-9 on the expected improvement, 100 iterations at most), from its default
 start (``solve()``: zero states and controls, infeasible) and from the rollout of zero controls (the
-start ours gets); the faster of the two is the baseline. Times are per solve, the median of many
-interleaved calls after a warm-up; our compile time (first call, with an empty JAX compilation
-cache under ``make bench-peers``) is reported apart.
+start ours gets); the faster of the two is the baseline. FDDP runs on one thread
+(``problem.nthreads = 1``; ``make bench-peers`` also sets ``OMP_NUM_THREADS=1``): the wheel's default,
+2 threads here, only adds OpenMP hand-offs for this small model (on the loaded 2-core machine FDDP
+took 1.2x-500x longer with 2 threads, and the spinning worker threads slowed the solves timed after
+it). Times are
+per solve, the median of many interleaved calls after a warm-up; our compile time (first call, with
+an empty JAX compilation cache under ``make bench-peers``) is reported apart.
+
+Each size is measured twice: in this process, with JAX's defaults, and in a fresh process with
+JAX's synchronous CPU dispatch (``jax.config.update("jax_cpu_enable_async_dispatch", False)``
+before the first computation), which runs each solve on the calling thread instead of handing it
+to a worker thread and waiting; on a loaded machine that hand-off, not the solver, is what a
+millisecond solve waits on. The results are the same (the same compiled program runs).
 """
 
+import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -83,10 +96,10 @@ def model_gap(model, samples=50, seed=0):
     return gap
 
 
-def _fddp(N, feasible, threads):
+def _fddp(N, feasible):
     model = crocoddyl.ActionModelUnicycle()
     problem = crocoddyl.ShootingProblem(X0, [model] * N, model)
-    problem.nthreads = threads
+    problem.nthreads = 1
     solver = crocoddyl.SolverFDDP(problem)
     if feasible:
         us = [np.zeros(2)] * problem.T
@@ -102,20 +115,18 @@ def _fddp(N, feasible, threads):
     return solve
 
 
-# FDDP's variants: its default start (zero states and controls) or the rollout of zero controls
-# (ours), with crocoddyl's default thread count (the cores) or one thread (no OpenMP hand-offs)
-VARIANTS = {f"{start}, {threads} thread{'s' * (threads > 1)}": (start == "rollout start", threads)
-            for start in ("zero start", "rollout start") for threads in (2, 1)}
+# FDDP's two starts: its default (zero states and controls) and the rollout of zero controls (ours)
+VARIANTS = {"zero start": False, "rollout start": True}
 
 
-def _case(N, runs):
+def _case(N, runs, sync=False):
     params, us0 = _params(crocoddyl.ActionModelUnicycle()), np.zeros((N, 2))
 
     def ours():
         return ilqr(unicycle_step, unicycle_cost, unicycle_terminal, X0, us0, params)
 
     first, _ = timed(ours)
-    times, outs = interleaved([ours] + [_fddp(N, *v) for v in VARIANTS.values()], runs)
+    times, outs = interleaved([ours] + [_fddp(N, v) for v in VARIANTS.values()], runs)
     t_ours, r = times[0], outs[0]
     # FDDP's ``iter`` is the index of its last iteration: one more backward pass and step than that
     fddp = {k: (t, s.iter + 1, s.cost, s.isFeasible, np.array(s.us)) for k, t, s in zip(VARIANTS, times[1:], outs[1:])}
@@ -127,13 +138,14 @@ def _case(N, runs):
     ratio = t_base["median"] / t_ours["median"]
     per_pass, per_iter = t_ours["median"] / r.passes, t_base["median"] / its
     detail = "; ".join(f"FDDP {k}: {v[0]['median'] * 1e3:.3g} ms, {v[1]} it" for k, v in fddp.items())
+    how = "JAX synchronous CPU dispatch (fresh process)" if sync else "JAX defaults"
     return {"benchmark": "peers: crocoddyl", "case": (
-        f"crocoddyl's unicycle (ActionModelUnicycle, dt 0.1, weights 10/1), N={N}, x0=(-1,-1,1): iLQR "
+        f"crocoddyl's unicycle (ActionModelUnicycle, dt 0.1, weights 10/1), N={N}, x0=(-1,-1,1), {how}: iLQR "
         f"{r.iterations} it / {r.passes} passes ({per_pass * 1e6:.0f} us per pass), FDDP {its} it "
         f"(passes), {start} ({per_iter * 1e6:.0f} us per pass)"),
         "seconds": t_ours["median"],
-        "baseline": (f"crocoddyl {crocoddyl.__version__} SolverFDDP (C++), default settings, the fastest of two starts "
-                     "x 1 or 2 threads"),
+        "baseline": (f"crocoddyl {crocoddyl.__version__} SolverFDDP (C++), default settings, the faster of its two "
+                     "starts, 1 thread"),
         "baseline_seconds": t_base["median"], "compile_seconds": first - t_ours["median"],
         "agree": (f"{agree}: costs {r.cost:.12g} (ours) / {fddp_cost:.12g} (FDDP), relative gap {gap:.1e} "
                   f"(target {AGREE:g}), every FDDP variant within {spread:.0e}, max |du| "
@@ -143,6 +155,14 @@ def _case(N, runs):
         "target": ">= 1x crocoddyl per solve, costs to 1e-8", "met": bool(agree and ratio >= 1.0)}
 
 
+def _sync_case(N, runs):
+    """:func:`_case` with JAX's synchronous CPU dispatch, in a fresh process (the setting must
+    precede the first computation of a process)."""
+    out = subprocess.run([sys.executable, __file__, "sync", str(N), str(runs)], capture_output=True, text=True,
+                         check=True, env=os.environ)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def run(quick=False):
     gap = model_gap(crocoddyl.ActionModelUnicycle())
     rows = [{"benchmark": "peers: crocoddyl", "case": "our JAX unicycle against crocoddyl's calc/calcDiff, 50 random "
@@ -150,10 +170,14 @@ def run(quick=False):
              "baseline": "", "baseline_seconds": None, "compile_seconds": None,
              "agree": f"max abs difference {gap:.1e}", "target": f"<= {MODEL_AGREE:g}", "met": bool(gap <= MODEL_AGREE)}]
     for N, runs in ((100, 20 if quick else 200), (1000, 5 if quick else 50)):
-        rows.append(_case(N, runs))
+        rows += [_case(N, runs), _sync_case(N, runs)]
     return rows
 
 
 if __name__ == "__main__":
-    for row in run(quick=True):
-        print(row)
+    if sys.argv[1:2] == ["sync"]:
+        jax.config.update("jax_cpu_enable_async_dispatch", False)
+        print(json.dumps(_case(int(sys.argv[2]), int(sys.argv[3]), sync=True)))
+    else:
+        for row in run(quick=True):
+            print(row)
