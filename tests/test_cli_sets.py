@@ -44,6 +44,7 @@ def test_a_run_leaves_all_its_outputs(fresh, tmp_path, capsys):
     assert main(ANOVA + ["--out", str(out)]) == 0
     assert {p.name for p in out.iterdir()} == WRITTEN | (set() if fresh else {"mine.txt"})
     assert (out / "anova_value_false_positives.csv").read_text() != "stale"
+    assert out.stat().st_mode & 0o755 == 0o755          # readable by others, as a folder mkdir makes
     assert not [p for p in tmp_path.rglob(".*")], "a temporary folder was left"
 
 

@@ -220,6 +220,9 @@ def _commit(files, fresh):
     out, staging = files.out, files.staging
     if fresh:
         try:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(staging, 0o777 & ~umask)        # a folder as mkdir makes it, not mkdtemp's 0700
             os.rename(staging, out)
             return
         except OSError:
