@@ -1,9 +1,13 @@
 """Candidate constraints on a discretized continuous system, with chapter 3's chance thresholds.
 
-Chapter 3's chance constraint on a state (eq. 3.1) extends to a set R of cells: action a is
-allowed in x only if S(x, a, R) = sum_{x' in R} S(x, a, x') <= psi(R), with the maximum-likelihood
-threshold of Lemma 3.2.1 (:mod:`.thresholds`: eq. 3.3 for the set, or the lemma taken exactly).
-The families (:mod:`.regions`):
+Chapter 3's chance constraint on a state (eq. 3.1) extends to a set R of cells as a limit on the
+chance of *entering* R: in a state x outside R, action a is allowed only if
+S(x, a, R) = sum_{x' in R} S(x, a, x') <= psi(R); inside R the constraint asks nothing. (Asking it
+inside too would leave every cell deep in R without an allowed action -- all of them stay in R --
+so any demonstration with the least chance of reaching R's interior would be impossible, whatever
+psi.) A region that holds a demonstrated state (at the grid's resolution) is no candidate: the
+demonstrations entered it. The threshold is the maximum-likelihood one of Lemma 3.2.1
+(:mod:`.thresholds`: eq. 3.3 for the set, or the lemma taken exactly). The families (:mod:`.regions`):
 
 * ``"bound"`` -- every interior cell edge of every coordinate, both sides (x_i <= edge, x_i >= edge);
 * ``"disk"`` / ``"box"`` -- obstacles in a plane of two coordinates, centred every ``every`` cells,
@@ -97,6 +101,7 @@ def _bound_columns(mdp, grid, dim, bounds):
     onehot = sp.csr_matrix((np.ones(grid.n_cells), (np.arange(grid.n_cells), coords)), shape=(grid.n_cells, n))
     H = (mdp.transitions @ onehot).toarray()                      # (X*A, n): S(x, a, coordinate cell j)
     above, below = np.cumsum(H[:, ::-1], axis=1)[:, ::-1], np.cumsum(H, axis=1)
+    row_coord = np.repeat(coords, mdp.n_actions)
     columns = []
     for r in bounds:
         j = int(np.searchsorted(grid.centers_1d(dim), r.value, side="right"))   # cells above the bound: j..n-1
@@ -104,8 +109,17 @@ def _bound_columns(mdp, grid, dim, bounds):
             column = above[:, j] if r.side == "upper" else below[:, j - 1]
         else:
             column = np.full(H.shape[0], 1.0 if (j == 0) == (r.side == "upper") else 0.0)
-        columns.append(sp.csc_matrix(column[:, None]))
+        inside = row_coord >= j if r.side == "upper" else row_coord < j
+        columns.append(sp.csc_matrix(np.where(inside, 0.0, column)[:, None]))       # entering R only
     return sp.hstack(columns, format="csc")
+
+
+def _obstacle_columns(mdp, grid, obstacles):
+    """S(x, a, R) (X*A, K) of obstacle regions, 0 in the rows of states inside R (entering R only)."""
+    inside = sp.csr_matrix(np.stack([cells_in(r, grid) for r in obstacles], axis=1).astype(float))
+    SR = sp.csc_matrix(mdp.transitions @ inside)
+    rows_inside = sp.csc_matrix(sp.kron(inside, np.ones((mdp.n_actions, 1))))
+    return sp.csc_matrix(SR - SR.multiply(rows_inside))
 
 
 def _groups(mdp, grid, regions, cells):
@@ -119,8 +133,7 @@ def _groups(mdp, grid, regions, cells):
     others = [k for k, r in enumerate(regions) if not isinstance(r, Bound)]
     if others:
         order += others
-        blocks.append(lambda: sp.csc_matrix(mdp.transitions @ sp.csr_matrix(
-            np.stack([cells_in(regions[k], grid) for k in others], axis=1).astype(float))))
+        blocks.append(lambda: _obstacle_columns(mdp, grid, [regions[k] for k in others]))
     if cells:
         order += list(range(len(regions), len(regions) + grid.n_cells))
         blocks.append(lambda: sp.csc_matrix(mdp.transitions))
@@ -128,10 +141,12 @@ def _groups(mdp, grid, regions, cells):
 
 
 def region_candidates(mdp, demos, grid, regions=(), cells=False, thresholds="lemma"):
-    """Candidates (module docstring) for ``regions`` (from :func:`bound_regions`, :func:`disk_regions`,
-    :func:`box_regions`) and, with ``cells``, one per cell, on the discretized ``mdp`` with the
-    ``demos`` mapped onto it; ``thresholds``: "lemma" or "eq3.3" (:mod:`.thresholds`)."""
-    regions = list(regions)
+    """Candidates (module docstring) for those of ``regions`` (from :func:`bound_regions`,
+    :func:`disk_regions`, :func:`box_regions`) that hold no demonstrated cell and, with ``cells``, one
+    per cell, on the discretized ``mdp`` with the ``demos`` mapped onto it; ``thresholds``: "lemma"
+    or "eq3.3" (:mod:`.thresholds`)."""
+    visited = grid.centers(np.unique(demos.states))
+    regions = [r for r in regions if not r.inside(visited).any()]     # the demonstrations entered it
     listed = regions + ([None] * grid.n_cells if cells else [])
     if not listed:
         raise ValueError("candidates: no candidate families chosen")

@@ -76,7 +76,7 @@ def choose_engine(mdp, n_candidates):
 
 def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, transitions=None, truncate=False,
           engine="auto", scheduler="auto", workers=None, progress=None, plane=(0, 1), every=2, radii=None,
-          half_widths=None, thresholds="lemma"):
+          half_widths=None, thresholds="lemma", criterion="F"):
     """Greedy constraint inference on the grid MDP of ``problem`` from a :class:`~.recordings.Recording`.
 
     ``families``: candidate families ("bound", "disk", "box", "cell"; :mod:`.candidates`, with
@@ -84,7 +84,8 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, trans
     demonstration) as in :func:`mutual.constraints.greedy_inference`; ``transitions``: S if already
     discretized (else :func:`.discretize.discretize` with ``scheduler``, ``workers``);
     ``truncate``: cut demonstrations to the shortest; ``thresholds``: "lemma" or "eq3.3"
-    (:mod:`.thresholds`); ``engine``: "auto" (:func:`choose_engine`), "gather" or "numpy";
+    (:mod:`.thresholds`); ``criterion``: "F" (the thesis's ranking, eq. 2.25) or "likelihood" (the
+    exact gain); ``engine``: "auto" (:func:`choose_engine`), "gather" or "numpy";
     ``progress(stage, detail)``: called as stages and rounds finish.
     """
     say = progress or (lambda *args: None)
@@ -108,8 +109,8 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, trans
         say("round", f"round {i + 1}: " + (cand.label(best) if best is not None else "stop rule"))
 
     start = time.perf_counter()
-    result = greedy_inference(mdp, mapped.demos, cand.candidates, rounds, min_gain=min_gain, engine=engine,
-                              on_round=on_round)
+    result = greedy_inference(mdp, mapped.demos, cand.candidates, rounds, min_gain=min_gain, criterion=criterion,
+                              engine=engine, on_round=on_round)
     seconds["inference"] = time.perf_counter() - start
     return ContinuousInference(problem, mdp, mapped, cand, result, scored, seconds)
 

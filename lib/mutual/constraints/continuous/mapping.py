@@ -105,6 +105,13 @@ def _with_support(transitions, rows, cols, n_actions):
     return out, int(zero.sum())
 
 
+def check_recording(problem, recording, truncate=False):
+    """Align ``recording`` to the time step and check its states lie in the box (the errors of
+    :func:`to_demonstrations` that need no discretization, for an early report)."""
+    states, _, index = align(recording, problem.dt, truncate)
+    check_box(problem.grid, recording, states, index)
+
+
 def to_demonstrations(problem, recording, transitions, truncate=False):
     """:class:`Mapped` demonstrations of ``recording`` on the grid MDP of ``problem`` whose
     discretized dynamics are ``transitions`` (module docstring)."""
