@@ -11,6 +11,7 @@ Heavy libraries are imported inside the commands.
 from . import common
 
 DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 5, 0.1, 5
+FAMILIES = ("bound", "disk", "box", "cell")   # mutual.constraints.continuous.candidates.FAMILIES (no numpy here; a test checks)
 
 INFER_DESCRIPTION = f"""\
 Constraints from continuous demonstrations (an extension of chapters 2-3; Section 3.4's next step).
@@ -154,7 +155,11 @@ def run_infer_continuous(args):
     with common.about(system_path):
         spec = load_system(system_path)
     problem = _with_overrides(args, spec.problem, system_path)
-    families = args.families.split(",") if args.families else spec.candidates["families"]
+    families = [f.strip() for f in args.families.split(",")] if args.families else spec.candidates["families"]
+    unknown = [f for f in families if f not in FAMILIES]
+    if unknown:
+        raise common.InputError(f"--families {args.families}: unknown family {unknown[0]!r}; choose from "
+                                f"{', '.join(FAMILIES)}")
     system = problem.system
     with common.about(traj_path):
         recording = read_recording(traj_path, system.state_names, system.control_names)
@@ -166,7 +171,7 @@ def run_infer_continuous(args):
             bar.set_postfix_str(detail[:60])
 
         with common.about(traj_path):
-            run = infer(problem, recording, families=[f.strip() for f in families], rounds=args.rounds,
+            run = infer(problem, recording, families=families, rounds=args.rounds,
                         min_gain=args.min_gain, truncate=args.truncate, scheduler=scheduler, workers=args.workers,
                         progress=progress, thresholds=args.thresholds, plane=spec.candidates["plane"],
                         every=spec.candidates["every"], radii=spec.candidates["radii"],

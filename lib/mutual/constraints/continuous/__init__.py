@@ -8,7 +8,7 @@ chance thresholds and greedy inference:
 * :mod:`.systems` -- continuous dynamics x' = f(x, u): named systems and your own ``module:function``;
 * :mod:`.grid`, :mod:`.problem`, :mod:`.systemfile` -- the box and its cells, the controls, the
   task, the tabular MDP, and the system TOML file that describes them;
-* :mod:`.discretize` -- S(x, a, x') by Monte Carlo within cells or by Kuhn-triangulation
+* :mod:`.discretization` -- S(x, a, x') by Monte Carlo within cells or by Kuhn-triangulation
   interpolation, in chunks that run in one process or on Dask;
 * :mod:`.recordings`, :mod:`.mapping` -- recorded trajectories (CSV), aligned to the time step and
   mapped to cells and actions (controls inferred where they were not recorded);
@@ -22,7 +22,7 @@ chance thresholds and greedy inference:
 
 from .candidates import RegionCandidates, bound_regions, box_regions, disk_regions, region_candidates
 from .demonstrators import mppi_rollouts, rollout, soft_demonstrator, starts_around
-from .discretize import discretize
+from .discretization import discretize
 from .grid import Grid
 from .inference import ContinuousInference, boundary_errors, infer
 from .mapping import to_demonstrations

@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..mdp import expected_next, masked_logsumexp
-from .discretize import discretize
+from .discretization import discretize
 from .grid import Grid
 from .recordings import Recording
 from .regions import cells_in

@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from .discretize import discretize
+from .discretization import discretize
 from .grid import Grid
 from .inference import boundary_errors, infer
 from .regions import boundary_distance

@@ -1,6 +1,6 @@
 """Constraint inference from continuous recordings: chapters 2-3's greedy inference on the grid MDP.
 
-:func:`infer` runs the whole pipeline -- discretize the dynamics (:mod:`.discretize`), map the
+:func:`infer` runs the whole pipeline -- discretize the dynamics (:mod:`.discretization`), map the
 recordings onto the grid (:mod:`.mapping`), build the candidates with their chance thresholds
 (:mod:`.candidates`), and add them greedily by F (Algorithm 4, eq. 2.25;
 :func:`mutual.constraints.greedy_inference`) until the stop rule -- and returns a
@@ -16,7 +16,7 @@ import pandas as pd
 from .. import fast
 from ..inference import greedy_inference
 from .candidates import families_regions, region_candidates
-from .discretize import discretize
+from .discretization import discretize
 from .mapping import to_demonstrations
 
 #: above this much backup work (states x actions x candidates x steps) the compiled gather engine runs
@@ -82,7 +82,7 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, trans
     ``families``: candidate families ("bound", "disk", "box", "cell"; :mod:`.candidates`, with
     ``plane``, ``every``, ``radii``, ``half_widths``); ``rounds`` and ``min_gain`` (nats per
     demonstration) as in :func:`mutual.constraints.greedy_inference`; ``transitions``: S if already
-    discretized (else :func:`.discretize.discretize` with ``scheduler``, ``workers``);
+    discretized (else :func:`.discretization.discretize` with ``scheduler``, ``workers``);
     ``truncate``: cut demonstrations to the shortest; ``thresholds``: "lemma" or "eq3.3"
     (:mod:`.thresholds`); ``criterion``: "F" (the thesis's ranking, eq. 2.25) or "likelihood" (the
     exact gain); ``engine``: "auto" (:func:`choose_engine`), "gather" or "numpy";

@@ -129,8 +129,10 @@ def _stride(recording, d, dt):
     t = recording.times[d]
     steps = np.diff(t)
     period = steps[0]
-    if period <= 0:
-        raise ValueError(f"{recording.where(d, 1, 't')}: time {t[1]:g} repeats the previous sample's time")
+    repeated = np.flatnonzero(steps <= 0)
+    if repeated.size:
+        k = int(repeated[0]) + 1
+        raise ValueError(f"{recording.where(d, k, 't')}: time {t[k]:g} repeats the previous sample's time")
     off = np.flatnonzero(np.abs(steps - period) > _TOLERANCE * max(period, 1e-12) + 1e-12)
     if off.size:
         k = int(off[0]) + 1

@@ -4,7 +4,7 @@ Section 3.4 expects the continuous analogue of the soft backup (eqs. 2.19-2.21) 
 
     -dV/dt (x, t) = softmax_a [ r(x, a) + grad V . f(x, a) ].
 
-On the barycentric discretization (:mod:`.discretize`) the soft backup is a semi-Lagrangian scheme:
+On the barycentric discretization (:mod:`.discretization`) the soft backup is a semi-Lagrangian scheme:
 E_{x'} V(x') is V linearly interpolated at the integrated point, so V_t(x) = log sum_a exp(r dt +
 V_{t+dt}(x + f dt)). Expanding in dt,
 
@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ..backup import log_partition
-from .discretize import discretize, kuhn_weights
+from .discretization import discretize, kuhn_weights
 from .experiments import with_cells
 
 #: jax forms of the named systems (hj-reachability evaluates the dynamics in jax)

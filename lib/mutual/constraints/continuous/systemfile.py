@@ -99,7 +99,11 @@ def _system(r, spec, path):
         r.fail("system", f"must be a named system ({', '.join(SYSTEMS)}) or 'module:function', got {spec!r}")
     state, control, params = r.table("state"), r.table("control"), r.table("parameters")
     named = SYSTEMS.get(spec)
+    if named is None and ":" not in spec:
+        r.fail("system", f"{spec!r} is neither a named system ({', '.join(SYSTEMS)}) nor 'module:function'")
     n = len(r.numbers(state, "state", "low"))
+    if named and n != len(named[1]):
+        r.fail("state.low", f"system {spec!r} has {len(named[1])} coordinates ({', '.join(named[1])}), got {n}")
     defaults = named[1:] if named else (None, None, (), None, None)
     names = r.texts(state, "state", "names", n, list(defaults[0]) if named else None)
     units = r.texts(state, "state", "units", n, list(defaults[1]) if named else [""] * n)
@@ -107,8 +111,6 @@ def _system(r, spec, path):
     control_names = r.texts(control, "control", "names", None, list(defaults[3]) if named else None)
     control_units = r.texts(control, "control", "units", len(control_names),
                             list(defaults[4]) if named else [""] * len(control_names))
-    if named and len(names) != len(named[1]):
-        r.fail("state.low", f"system {spec!r} has {len(named[1])} coordinates ({', '.join(named[1])}), got {n}")
     try:
         return System(spec, names, units, control_names, control_units, periodic, params,
                       None if named else folder_of(path))
