@@ -123,8 +123,8 @@ def _obstacle_columns(mdp, grid, obstacles):
 
 
 def _groups(mdp, grid, regions, cells):
-    """S(x, a, R) (X*A, k) blocks, one at a time: one per bounded coordinate, one for the obstacles,
-    one for the cells (S itself); and the candidate numbers of each block, in order."""
+    """The candidate numbers of the blocks in order, and functions that build the S(x, a, R) (X*A, k)
+    blocks: one per bounded coordinate, one for the obstacles, one for the cells (S itself)."""
     order, blocks = [], []
     for dim in sorted({r.dim for r in regions if isinstance(r, Bound)}):
         ks = [k for k, r in enumerate(regions) if isinstance(r, Bound) and r.dim == dim]
@@ -137,7 +137,7 @@ def _groups(mdp, grid, regions, cells):
     if cells:
         order += list(range(len(regions), len(regions) + grid.n_cells))
         blocks.append(lambda: sp.csc_matrix(mdp.transitions))
-    return np.array(order, dtype=np.int64), (build() for build in blocks)
+    return np.array(order, dtype=np.int64), blocks
 
 
 def region_candidates(mdp, demos, grid, regions=(), cells=False, thresholds="lemma"):

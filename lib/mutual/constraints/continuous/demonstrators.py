@@ -6,8 +6,8 @@ hidden regions exactly (every executed step is checked on the continuous traject
 sub-step; an action that would enter a hidden region is never taken):
 
 * :func:`soft_demonstrator` -- a maximum-causal-entropy (Boltzmann) demonstrator (eq. 2.19) solved
-  on a much finer grid with its own control set (barycentric discretization, hidden regions
-  forbidden outright, psi = 0), acting by state feedback from the cell it is in;
+  on a much finer grid with its own control set (barycentric discretization, every cell touching a
+  hidden region forbidden outright, psi = 0), acting by state feedback from the cell it is in;
 * :func:`mppi_rollouts` -- sampled trajectory optimisation (MPPI, Williams et al. 2017) on the
   continuous system with continuous controls; its temperature is the reward's temperature
   (path-integral control is the trajectory-level maximum-entropy model).
@@ -26,7 +26,7 @@ from ..mdp import expected_next, masked_logsumexp
 from .discretization import discretize
 from .grid import Grid
 from .recordings import Recording
-from .regions import cells_in
+from .regions import Bound, cells_in
 from .systems import integrate
 
 VIOLATION_COST = 1e3   # MPPI: cost of a planned step inside a hidden region (executed steps never enter one)
@@ -67,10 +67,19 @@ class SoftDemonstrator:
         return Q
 
 
+def touching(region, grid):
+    """Cells that touch ``region`` (their centre within half a cell of it): ``region`` grown by half a
+    cell -- half the cell width for a bound, half the cell diagonal in the plane for an obstacle."""
+    dims = [region.dim] if isinstance(region, Bound) else list(region.dims)
+    half = 0.5 * np.sqrt(sum(np.max(grid.widths_1d(i)) ** 2 for i in dims))
+    return cells_in(region.inflated(half), grid)
+
+
 def soft_demonstrator(problem, hidden, cells, controls=None, temperature=None, scheduler="auto"):
     """A :class:`SoftDemonstrator` for ``problem``'s task under the ``hidden`` regions, on a uniform
     grid of ``cells`` per coordinate over the same box, with ``controls`` (default: the problem's)
-    and ``temperature`` (default: the problem's)."""
+    and ``temperature`` (default: the problem's). Its grid forbids, with probability 0, every cell that
+    touches a hidden region (:func:`touching`): it keeps the margin a cell's extent needs."""
     g = problem.grid
     fine_grid = Grid.uniform(g.low, g.high, cells, g.periodic, g.names, g.units)
     reward = problem.reward if temperature is None else replace(problem.reward, temperature=float(temperature))
@@ -80,7 +89,7 @@ def soft_demonstrator(problem, hidden, cells, controls=None, temperature=None, s
     mdp = fine.mdp(S)
     inside = np.zeros(fine_grid.n_cells, dtype=bool)
     for region in hidden:
-        inside |= cells_in(region, fine_grid)
+        inside |= touching(region, fine_grid)
     mask = (np.asarray(S @ inside.astype(float)).ravel() <= 0).reshape(mdp.n_states, mdp.n_actions)
     V = np.empty((mdp.horizon + 1, mdp.n_states))
     V[-1] = mdp.terminal_reward
@@ -109,6 +118,9 @@ def rollout(demonstrator, starts, seed=0, noise=0.0, record_every=1):
     rng = np.random.default_rng(seed)
     x = p.grid.wrap(np.atleast_2d(np.asarray(starts, dtype=float)))
     N, A = len(x), p.n_actions
+    if np.isneginf(dem.V[0][p.grid.cell_of(x)]).any():
+        raise ValueError(f"demonstrator: on its {' x '.join(map(str, p.grid.shape))} grid no trajectory from some start "
+                         "avoids the hidden regions (V = -inf there); use a finer demonstrator grid")
     states, controls = [[row] for row in x], [[] for _ in range(N)]
     for t in range(p.horizon):
         safe = ~_violates(p, dem.hidden, np.repeat(x, A, axis=0), np.tile(p.controls, (N, 1)))[0].reshape(N, A)

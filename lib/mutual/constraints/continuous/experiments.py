@@ -83,7 +83,10 @@ def _expected_successor(S, grid, reference):
     return out
 
 
-def _summary(run, truth):
+def summary(run, truth):
+    """One row about an inference against the ``truth`` regions: the chosen constraints, F of the first,
+    whether the first is of the truth's kind and on its coordinates, the boundary error(s)
+    (:func:`.inference.boundary_errors`), thresholds Lemma 3.2.1 raised, steps S gave probability 0."""
     errors = boundary_errors(run, truth)
     regions = run.chosen_regions()
     first = regions[0] if regions else None
@@ -104,8 +107,20 @@ def resolution_sweep(problem, recording, resolutions, truth, schemes=("sample", 
             p = with_cells(problem, cells).replace(scheme=scheme)
             run = infer(p, recording, **options)
             rows.append({"scheme": scheme, "cells": p.grid.n_cells, "cells per coordinate": " x ".join(map(str, p.grid.shape)),
-                         **_summary(run, truth)})
+                         **summary(run, truth)})
     return pd.DataFrame(rows)
+
+
+def first_demonstrations(recording, n):
+    """The recording's first ``n`` demonstrations."""
+    return replace(recording, **{k: getattr(recording, k)[:n] for k in ("ids", "times", "states")},
+                   controls=None if recording.controls is None else recording.controls[:n],
+                   lines=None if recording.lines is None else recording.lines[:n])
+
+
+def tempered(reward, factor):
+    """``reward`` with its temperature multiplied by ``factor``."""
+    return replace(reward, temperature=reward.temperature * float(factor))
 
 
 def demos_sweep(problem, recordings, counts, truth, **options):
@@ -114,11 +129,8 @@ def demos_sweep(problem, recordings, counts, truth, **options):
     rows = []
     for draw, recording in enumerate(recordings):
         for n in counts:
-            subset = replace(recording, **{k: getattr(recording, k)[:n] for k in ("ids", "times", "states")},
-                             controls=None if recording.controls is None else recording.controls[:n],
-                             lines=None if recording.lines is None else recording.lines[:n])
-            run = infer(problem, subset, **options)
-            rows.append({"draw": draw, "demonstrations": n, **_summary(run, truth)})
+            run = infer(problem, first_demonstrations(recording, n), **options)
+            rows.append({"draw": draw, "demonstrations": n, **summary(run, truth)})
     return pd.DataFrame(rows)
 
 
@@ -130,7 +142,7 @@ def robustness(problem, recording, variants, truth, **options):
         p, extra = (change(problem), {}) if callable(change) else (problem, dict(change))
         run = infer(p, recording, **(options | extra))
         rows.append({"setting": label, "cells": p.grid.n_cells, "controls": p.n_actions, "dt": p.dt,
-                     "temperature": p.reward.temperature, "scheme": p.scheme, **_summary(run, truth)})
+                     "temperature": p.reward.temperature, "scheme": p.scheme, **summary(run, truth)})
     return pd.DataFrame(rows)
 
 
@@ -155,14 +167,13 @@ def measured(fn, *args, **kwargs):
     return result
 
 
-def timed_inference(problem, recording, **options):
+def timed_inference(problem, recording, truth=(), **options):
     """A picklable summary of :func:`.inference.infer` for :func:`measured`: the cells, the stages'
-    seconds and the chosen constraints."""
+    seconds, the chosen constraints and the boundary error against each region of ``truth``."""
     import mutual  # noqa: F401  (the XLA setting, as in the parent)
     run = infer(problem, recording, **options)
     return {"cells": problem.grid.n_cells, **{f"{k} s": v for k, v in run.seconds.items()},
-            "candidates": len(run.candidates),
-            "chosen": "; ".join(run.candidates.label(k) for k in run.result.chosen) or "none"}
+            "candidates": len(run.candidates), **summary(run, list(truth))}
 
 
 def idle_memory():
@@ -174,3 +185,10 @@ def _nothing():
     import jax  # noqa: F401
     import mutual.constraints.continuous  # noqa: F401
     return None
+
+
+def reportable(value):
+    """A boundary error for the report: the number, or "not found" where no constraint of the true
+    region's kind was chosen (nan)."""
+    value = float(value)
+    return value if math.isfinite(value) else "not found"

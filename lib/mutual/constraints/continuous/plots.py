@@ -158,3 +158,14 @@ def error_panel(ax, table, x, y, by, title=None, logx=False, marker="o"):
     if title:
         ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
+
+
+def cell_values_panel(ax, grid, values, label, cmap="viridis", vmin=0.0, vmax=1.0):
+    """A 2-D grid's cells shaded by ``values`` (X,) (nan: grey), on the grid's own edges."""
+    image = np.ma.masked_invalid(np.asarray(values, dtype=float).reshape(grid.shape).T)
+    mesh = ax.pcolormesh(grid.edges[0], grid.edges[1], image, cmap=cmap, vmin=vmin, vmax=vmax, shading="flat")
+    ax.set_facecolor("0.85")
+    ax.figure.colorbar(mesh, ax=ax, shrink=0.85, label=label)
+    ax.set_xlabel(_axis(grid, 0))
+    ax.set_ylabel(_axis(grid, 1))
+    return mesh

@@ -134,10 +134,11 @@ def _tempered(reward, temperature):
     return replace(reward, temperature=float(temperature))
 
 
-def convergence(problem, start, resolutions, courant=0.5, kappa=1.0, pde_cells=101):
+def convergence(problem, start, resolutions, courant=0.5, kappa=1.0, pde_cells=101, accuracy="high"):
     """Discrete values at ``start`` as the grid refines, each with dt = ``courant`` x min over the
     coordinates of (cell width / largest speed), and the horizon kept at the problem's duration; beside the mean- and
-    soft-Hamiltonian PDE values on ``pde_cells`` nodes per coordinate. Returns a DataFrame."""
+    soft-Hamiltonian PDE values on ``pde_cells`` nodes per coordinate (hj-reachability's ``accuracy``).
+    Returns a DataFrame."""
     duration = problem.horizon * problem.dt
     speed = _max_speeds(problem)
     rows = []
@@ -148,8 +149,8 @@ def convergence(problem, start, resolutions, courant=0.5, kappa=1.0, pde_cells=1
         p = p.replace(dt=duration / steps, horizon=steps)
         rows.append({"cells per coordinate": cells, "dt": p.dt, "steps T": steps, **discrete_values(p, start, kappa)})
     table = pd.DataFrame(rows)
-    table["PDE, mean Hamiltonian"] = pde_value(problem, start, pde_cells, kappa, "mean")
-    table["PDE, softmax Hamiltonian"] = pde_value(problem, start, pde_cells, kappa, "soft")
+    table["PDE, mean Hamiltonian"] = pde_value(problem, start, pde_cells, kappa, "mean", accuracy)
+    table["PDE, softmax Hamiltonian"] = pde_value(problem, start, pde_cells, kappa, "soft", accuracy)
     return table
 
 

@@ -55,11 +55,12 @@ def infeasible_at(mdp, demos, SR, psi):
     return infeasible_candidates(mdp, demos, base, forbidden_by(SR, psi))
 
 
-def lemma(mdp, demos, SR, psi_star, ways=8):
+def lemma(mdp, demos, SR, psi_star, columns_per_call=128):
     """Lemma 3.2.1 exactly (module docstring) for columns S(x, a, R) (X*A, K) that are infeasible
     at eq. (3.3)'s ``psi_star``: the lowest threshold of each that keeps every demonstration
-    feasible, by a ``ways``-ary search over the column's distinct values (feasibility is monotone:
-    a larger threshold forbids less), every column and split point in one boolean backup per step."""
+    feasible, by a many-way search over the column's distinct values (feasibility is monotone: a
+    larger threshold forbids less), as many split points per boolean backup as ``columns_per_call``
+    allows (one compiled call of the gather form holds 128)."""
     SR = sp.csc_matrix(SR)
     psi = np.asarray(psi_star, dtype=float).copy()
     values = []
@@ -68,8 +69,10 @@ def lemma(mdp, demos, SR, psi_star, ways=8):
         values.append(np.unique(column[column > psi[k] + TOLERANCE]))   # the largest forbids nothing: feasible
     lo, hi = np.full(len(values), -1), np.array([v.size - 1 for v in values])
     while (hi - lo > 1).any():
+        open_ = np.flatnonzero(hi - lo > 1)
+        ways = max(2, min(64, columns_per_call // open_.size + 1))
         columns, splits = [], []
-        for i in np.flatnonzero(hi - lo > 1):
+        for i in open_:
             points = np.unique(np.linspace(lo[i], hi[i], ways + 1).round().astype(int)[1:-1])
             points = points[(points > lo[i]) & (points < hi[i])]
             columns += [i] * points.size
@@ -89,30 +92,34 @@ def lemma(mdp, demos, SR, psi_star, ways=8):
 
 
 def chance_columns(mdp, demos, groups, rule="lemma"):
-    """``(psi, forbidden, raised)`` for candidate groups: ``groups`` yields S(x, a, R) (X*A, k) column
-    blocks, built one at a time so that only the few columns that need raising are kept in memory.
-    psi (K,) by ``rule`` ("lemma" or "eq3.3"; module docstring), ``forbidden`` the boolean CSC
-    matrix [S(x, a, R_k) > psi_k] (X*A, K), ``raised`` the candidates Lemma 3.2.1 raised."""
+    """``(psi, forbidden, raised)`` for candidate groups: ``groups`` is a list of functions that
+    build S(x, a, R) (X*A, k) column blocks, one at a time, so that only the few columns that need
+    raising are kept in memory. psi (K,) by ``rule`` ("lemma" or "eq3.3"; module docstring),
+    ``forbidden`` the boolean CSC matrix [S(x, a, R_k) > psi_k] (X*A, K), ``raised`` the candidates
+    Lemma 3.2.1 raised above eq. (3.3)."""
     if rule not in THRESHOLDS:
         raise ValueError(f"thresholds: must be one of {list(THRESHOLDS)}, got {rule!r}")
     rows = demonstrated_rows(mdp, demos)
-    psi, forbidden, kept, raised = [], [], [], []
-    for SR in groups:
-        SR = sp.csc_matrix(SR)
-        start = sum(p.size for p in psi)
+    psi, forbidden, sizes = [], [], []
+    for build in groups:
+        SR = sp.csc_matrix(build())
         psi.append(eq33(SR, rows))
         forbidden.append(forbidden_by(SR, psi[-1]))
-        if rule == "lemma":
-            bad = np.flatnonzero(infeasible_at(mdp, demos, SR, psi[-1]))
-            kept.append(SR[:, bad])
-            raised.extend(start + bad)
+        sizes.append(SR.shape[1])
         del SR
     psi, forbidden = np.concatenate(psi), sp.hstack(forbidden, format="csc")
-    if raised:
+    if rule == "eq3.3":
+        return psi, forbidden, np.zeros(0, dtype=np.int64)
+    base = np.ones((mdp.n_states, mdp.n_actions), dtype=bool)
+    raised = np.flatnonzero(infeasible_candidates(mdp, demos, base, forbidden))    # all groups in one backup
+    if raised.size:
+        starts = np.cumsum([0] + sizes)
+        kept = [sp.csc_matrix(build())[:, raised[(raised >= a) & (raised < b)] - a]            # rebuilt, the few kept
+                for build, a, b in zip(groups, starts[:-1], starts[1:]) if ((raised >= a) & (raised < b)).any()]
         kept = sp.hstack(kept, format="csc")
         psi[raised] = lemma(mdp, demos, kept, psi[raised])
         old, new = forbidden.tocoo(), forbidden_by(kept, psi[raised]).tocoo()
         stay = ~np.isin(old.col, raised)
-        rows_, cols = np.r_[old.row[stay], new.row], np.r_[old.col[stay], np.asarray(raised)[new.col]]
+        rows_, cols = np.r_[old.row[stay], new.row], np.r_[old.col[stay], raised[new.col]]
         forbidden = sp.csc_matrix((np.ones(rows_.size, dtype=bool), (rows_, cols)), shape=forbidden.shape)
-    return psi, forbidden, np.array(raised, dtype=np.int64)
+    return psi, forbidden, raised
