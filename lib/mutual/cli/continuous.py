@@ -268,7 +268,7 @@ def _simulate_system(args):
         else:
             recording = dm.mppi_rollouts(problem.replace(reward=_tempered(problem.reward, sim["temperature"])), hidden,
                                          starts, seed + 1, sim["samples"], sim["plan_steps"], sim["sigma"], noise,
-                                         sim["record_every"])
+                                         sim["record_every"], sim["margin"])
         bar.update(1)
     if args.no_controls:
         from dataclasses import replace

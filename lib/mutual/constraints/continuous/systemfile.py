@@ -11,7 +11,7 @@ Tables and keys (``[candidates]`` and ``[simulate]`` are optional)::
     [reward]   goal, state_weights, control_weights, terminal_weights, temperature
     [candidates]  families, plane, every, radii, half_widths
     [simulate]    hidden, start, spread, n, seed, demonstrator ("soft" or "mppi"), fine_cells,
-                  temperature, noise, record_every, samples, plan_steps, sigma
+                  temperature, noise, record_every, samples, plan_steps, sigma, margin
 
 Every mistake -- an unknown table or key, a missing one, a value of the wrong kind or length --
 raises a ValueError naming the file and the key (``table.key``).
@@ -34,7 +34,7 @@ _TABLES = {"parameters": None,
            "reward": ("goal", "state_weights", "control_weights", "terminal_weights", "temperature"),
            "candidates": ("families", "plane", "every", "radii", "half_widths"),
            "simulate": ("hidden", "start", "spread", "n", "seed", "demonstrator", "fine_cells", "temperature",
-                        "noise", "record_every", "samples", "plan_steps", "sigma")}
+                        "noise", "record_every", "samples", "plan_steps", "sigma", "margin")}
 _REQUIRED = {"state": ("low", "high", "cells"), "control": ("values",), "time": ("dt", "horizon"),
              "reward": ("goal",)}
 
@@ -197,7 +197,8 @@ def _simulate(r, problem, plane):
             "record_every": r.number(s, "simulate", "record_every", 1, integer=True, default=1),
             "samples": r.number(s, "simulate", "samples", 2, integer=True, default=256),
             "plan_steps": r.number(s, "simulate", "plan_steps", 1, integer=True, default=20),
-            "sigma": r.number(s, "simulate", "sigma", 0, default=0.5, strict_low=True)}
+            "sigma": r.number(s, "simulate", "sigma", 0, default=0.5, strict_low=True),
+            "margin": r.number(s, "simulate", "margin", 0, default=0.0)}
 
 
 def system_from_mapping(mapping, source="system", path=None):
