@@ -120,6 +120,12 @@ def block_size(mdp, n):
     return min(sizes, key=lambda b: (-(-max(n, 1) // b) * b, -b))
 
 
+def gather_block_size(mdp, n):
+    """Candidates per compiled block of the gather form: as :func:`block_size`, but a few candidates
+    (a round's baseline is one) get a block of their own size, 1, 2, 4 or 8, not 16."""
+    return min(block_size(mdp, n), 1 << (max(n, 1) - 1).bit_length())
+
+
 def _kernel(kind):
     """The jitted backup scan for S in stencil form (``kind="stencil"``) or gather form (``"gather"``)."""
     if kind not in _KERNELS:
@@ -183,7 +189,7 @@ def backup_blocks(mdp, form, masks_of, n, demos=None):
     if demos is not None:
         dx[:steps], da[:steps] = demos.states[:, :-1].T, demos.actions.T
     valid = np.arange(T) < steps
-    kb = block_size(mdp, max(n, 1))
+    kb = block_size(mdp, max(n, 1)) if kind == "stencil" else gather_block_size(mdp, max(n, 1))
     V0, log_lik = np.empty((X, n)), np.empty(n)
     with jax.enable_x64(True):
         args = [jnp.asarray(a) for a in (P, index, mdp.reward, mdp.terminal_reward)]

@@ -169,11 +169,12 @@ def measured(fn, *args, **kwargs):
 
 def timed_inference(problem, recording, truth=(), **options):
     """A picklable summary of :func:`.inference.infer` for :func:`measured`: the cells, the stages'
-    seconds, the chosen constraints and the boundary error against each region of ``truth``."""
+    seconds, the chosen constraints and their ``regions``, the boundary error against each region of
+    ``truth``."""
     import mutual  # noqa: F401  (the XLA setting, as in the parent)
     run = infer(problem, recording, **options)
     return {"cells": problem.grid.n_cells, **{f"{k} s": v for k, v in run.seconds.items()},
-            "candidates": len(run.candidates), **summary(run, list(truth))}
+            "candidates": len(run.candidates), **summary(run, list(truth)), "regions": run.chosen_regions()}
 
 
 def idle_memory():

@@ -21,6 +21,8 @@ from .mapping import to_demonstrations
 
 #: above this much backup work (states x actions x candidates x steps) the compiled gather engine runs
 GATHER_WORK = 2e7
+#: with more candidates than this, prune="auto" prunes (the same choices; below it the bound costs more than it saves)
+PRUNE_ABOVE = 128
 
 
 @dataclass(eq=False)
@@ -76,7 +78,7 @@ def choose_engine(mdp, n_candidates):
 
 def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, transitions=None, truncate=False,
           engine="auto", scheduler="auto", workers=None, progress=None, plane=(0, 1), every=2, radii=None,
-          half_widths=None, thresholds="lemma", criterion="F"):
+          half_widths=None, thresholds="lemma", criterion="F", prune="auto"):
     """Greedy constraint inference on the grid MDP of ``problem`` from a :class:`~.recordings.Recording`.
 
     ``families``: candidate families ("bound", "disk", "box", "cell"; :mod:`.candidates`, with
@@ -85,7 +87,9 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, trans
     discretized (else :func:`.discretization.discretize` with ``scheduler``, ``workers``);
     ``truncate``: cut demonstrations to the shortest; ``thresholds``: "lemma" or "eq3.3"
     (:mod:`.thresholds`); ``criterion``: "F" (the thesis's ranking, eq. 2.25) or "likelihood" (the
-    exact gain); ``engine``: "auto" (:func:`choose_engine`), "gather" or "numpy";
+    exact gain); ``prune``: score exactly only the candidates whose bound could win a round (the
+    same choices; :mod:`mutual.constraints.bounds`), "auto": with more than ``PRUNE_ABOVE`` candidates
+    and the ranking by F; ``engine``: "auto" (:func:`choose_engine`), "gather" or "numpy";
     ``progress(stage, detail)``: called as stages and rounds finish.
     """
     say = progress or (lambda *args: None)
@@ -102,6 +106,7 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, trans
     seconds["candidates"] = time.perf_counter() - start
     say("candidates", f"{len(cand)} candidates")
     engine = choose_engine(mdp, len(cand)) if engine == "auto" else engine
+    prune = (criterion == "F" and len(cand) > PRUNE_ABOVE) if prune == "auto" else prune
     scored = []
 
     def on_round(i, log_f, gain, best):
@@ -110,7 +115,7 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, trans
 
     start = time.perf_counter()
     result = greedy_inference(mdp, mapped.demos, cand.candidates, rounds, min_gain=min_gain, criterion=criterion,
-                              engine=engine, on_round=on_round)
+                              prune=bool(prune), engine=engine, on_round=on_round)
     seconds["inference"] = time.perf_counter() - start
     return ContinuousInference(problem, mdp, mapped, cand, result, scored, seconds)
 
