@@ -111,16 +111,16 @@ def test_sampling_and_interpolation_agree_as_the_resolution_grows():
 
 
 def test_dask_gives_the_same_transitions_as_one_process_on_one_or_two_workers(monkeypatch):
+    """In this process, on one worker thread, and on two worker processes reached by address."""
     from dask.distributed import LocalCluster
     monkeypatch.setattr(disc_module, "CHUNK_CELLS", 20)           # 81 cells: 5 chunks, each its own seed
     problem = pendulum(9)
     inline = discretize(problem, scheduler="inline")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        one = discretize(problem, scheduler=cluster.scheduler_address)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         two = discretize(problem, scheduler=cluster.scheduler_address)
-        cluster.scale(1)
-        cluster.wait_for_workers(1)
-        one = discretize(problem, scheduler=cluster.scheduler_address)
-    for other in (two, one):
+    for other in (one, two):
         assert (inline != other).nnz == 0
 
 

@@ -13,7 +13,7 @@ Two schemes (``Problem.scheme``):
 
 Every row of S sums to 1 and S is a sparse (X*A, X) matrix. The cells are cut into fixed
 chunks of ``CHUNK_CELLS``; each chunk is one task, seeded by (``seed``, chunk number), so the
-result is the same in one process or on a Dask cluster of any size (:func:`discretize`).
+result is the same in one process or on a Dask cluster of any size (:func:`discretize`, :mod:`.cluster`).
 """
 
 from dataclasses import dataclass
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from .cluster import map_tasks
 from .systems import integrate
 
 CHUNK_CELLS = 2048
@@ -139,9 +140,8 @@ def discretize(problem, scheduler="auto", workers=None, progress=False):
     if scheduler == "inline":
         parts = [chunk_transitions(task, problem) for task in _progress(tasks, progress)]
     else:
-        from ...study.sweep import run_tasks
-        parts, _ = run_tasks(chunk_transitions, tasks, shared=(problem,), scheduler=scheduler, workers=workers,
-                             progress=progress, desc="discretizing")
+        parts = map_tasks(chunk_transitions, tasks, shared=(problem,), scheduler=scheduler, workers=workers,
+                          progress=progress, desc="discretizing")
     rows, cols, probs = (np.concatenate(p) for p in zip(*parts))
     X, A = problem.grid.n_cells, problem.n_actions
     S = sp.csr_matrix((probs, (rows, cols)), shape=(X * A, X))
