@@ -22,7 +22,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from .cluster import map_tasks
-from .systems import integrate
 
 CHUNK_CELLS = 2048
 #: integrations (cells x controls x samples) above which ``scheduler="auto"`` uses Dask
