@@ -99,16 +99,16 @@ def _bound_columns(mdp, grid, dim, bounds):
     that coordinate's cells (cumulative sums; no (X*A, X) x (X, K) product)."""
     n, coords = grid.shape[dim], grid.coords(np.arange(grid.n_cells))[:, dim]
     onehot = sp.csr_matrix((np.ones(grid.n_cells), (np.arange(grid.n_cells), coords)), shape=(grid.n_cells, n))
-    H = (mdp.transitions @ onehot).toarray()                      # (X*A, n): S(x, a, coordinate cell j)
-    above, below = np.cumsum(H[:, ::-1], axis=1)[:, ::-1], np.cumsum(H, axis=1)
+    H = np.ascontiguousarray((mdp.transitions @ onehot).toarray().T)    # (n, X*A): S(x, a, coordinate cell j)
+    above, below = np.cumsum(H[::-1], axis=0)[::-1], np.cumsum(H, axis=0)   # S(x, a, index >= j), (<= j)
     row_coord = np.repeat(coords, mdp.n_actions)
     columns = []
     for r in bounds:
         j = int(np.searchsorted(grid.centers_1d(dim), r.value, side="right"))   # cells above the bound: j..n-1
         if 0 < j < n:
-            column = above[:, j] if r.side == "upper" else below[:, j - 1]
+            column = above[j] if r.side == "upper" else below[j - 1]
         else:
-            column = np.full(H.shape[0], 1.0 if (j == 0) == (r.side == "upper") else 0.0)
+            column = np.full(H.shape[1], 1.0 if (j == 0) == (r.side == "upper") else 0.0)
         inside = row_coord >= j if r.side == "upper" else row_coord < j
         columns.append(sp.csc_matrix(np.where(inside, 0.0, column)[:, None]))       # entering R only
     return sp.hstack(columns, format="csc")
