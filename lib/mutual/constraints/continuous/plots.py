@@ -152,7 +152,11 @@ def error_panel(ax, table, x, y, by, title=None, logx=False, marker="o"):
         if (stats["max"] > stats["min"]).any():
             ax.fill_between(stats[x], stats["min"], stats["max"], color=c, alpha=0.15, lw=0)
     if logx:
+        from matplotlib.ticker import NullFormatter, ScalarFormatter
         ax.set_xscale("log")
+        ax.set_xticks(sorted(table[x].unique()))
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(x)
     ax.set_ylabel(y)
     if title:
