@@ -101,6 +101,12 @@ def test_malformed_csv_names_file_line_and_column(tmp_path, text, phrase):
         read(path)
 
 
+def test_a_byte_order_mark_is_accepted(tmp_path):
+    path = tmp_path / "t.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + (PENDULUM_CSV + "a,0,0,0,3\na,0.1,0,0,3\n").encode())
+    assert read(path).ids == ("a",)
+
+
 def test_demo_ids_are_read_as_text(tmp_path):
     path = write(tmp_path, "t.csv", PENDULUM_CSV + "007,0,0,0,3\n007,0.1,0,0,3\n7,0,0,0,3\n7,0.1,0,0,3\n")
     assert read(path).ids == ("007", "7")

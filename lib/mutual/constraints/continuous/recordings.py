@@ -90,9 +90,11 @@ def read_recording(path, state_names, control_names=()):
     """Read trajectory CSV (module docstring); every problem raises a ValueError naming the file,
     the line (1 = the header) and the column."""
     try:
-        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_values=[""])
+        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_values=[""], encoding="utf-8-sig")
     except pd.errors.EmptyDataError:
         raise ValueError(f"{path}: the file is empty; expected a header demo,t,{','.join(state_names)}") from None
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path}: not a text file (not UTF-8: byte {err.start})") from None
     missing = [c for c in ("demo", "t", *state_names) if c not in df.columns]
     if missing:
         raise ValueError(f"{path}, line 1: missing column {missing[0]!r}; expected demo, t, {', '.join(state_names)}"
