@@ -7,7 +7,7 @@ its maximum-likelihood threshold psi* (eq. 3.3) and one constraint per action
 (Algorithm 4, eq. 2.25; :func:`mutual.constraints.greedy_inference`), until the stop rule fires.
 """
 
-from . import common
+from . import common, continuous
 
 DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 10, 0.1, 5
 
@@ -63,6 +63,7 @@ def register(subparsers):
                        help=f"candidates to print per round (default {DEFAULT_TOP}; the CSV has all)")
     common.add_output_options(infer)
     infer.set_defaults(handler=run_infer, prog=infer.prog)
+    continuous.register(commands)      # infer-continuous and simulate (issue 21)
     return parser
 
 
