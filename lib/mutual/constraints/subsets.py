@@ -114,7 +114,7 @@ def greedy_bound_survey(n_instances=40, k_max=3, width=4, length=4, seed=0):
     rows = []
     for i in range(n_instances):
         mdp = lattice_mdp(width, length, seed=[seed, i])
-        demos = sample_demonstrations(mdp, 1, rng=[seed, i])
+        demos = sample_demonstrations(mdp, 1, rng=np.random.default_rng([seed, i]))
         cand = constraint_candidates(mdp, demos, actions=False, chance=False)
         found, _ = greedy_versus_best(mdp, demos, cand, k_max, violations=False, engine="numpy")
         rows += [dict(instance=i, **r, suboptimal=bool(r["ratio"] < 1 - 1e-9)) for r in found]
