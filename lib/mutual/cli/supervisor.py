@@ -137,11 +137,14 @@ def run_fit(args):
         raise common.InputError(f"--level {args.level}: must be a finite number")
     with common.about(path):
         frame = read_interventions(path)    # every column, every row, before any solve; names file, line, column
+    half_width, shape, _ = GRIDS[args.grid]
+    with common.about(path):
+        from ..supervision.supervisor import check_inside
+        check_inside(frame, half_width, path)   # before any solve: names the line, in the file's coordinates
     groups = _groups(frame, args, path)
     w_maxes = _w_maxes(args.w_max)
 
     from ..supervision import GridSpec, fit_supervisor, value_library
-    half_width, shape, _ = GRIDS[args.grid]
     with common.about("--w-max/--radius/--speed"):
         library = value_library(w_maxes, args.radius, grid_spec=GridSpec(half_width, shape), speed=args.speed,
                                 progress=not args.no_progress, method=args.method)
@@ -155,8 +158,9 @@ def run_fit(args):
                      "k": args.level, "alpha": fit.level(args.level), "coverage": fit.coverage(states, args.level),
                      "loglik": fit.loglik, "prior": args.prior, "at_library_edge": _at_edge(fit)})
     table = pd.DataFrame(rows)
-    outputs = {"table": common.write_csv(table, common.output_path(args, "supervisor_fit.csv"), float_format="%.6g"),
-               "figure": common.save_figure(_figure(fits, args), common.output_path(args, "supervisor_fit.png"))}
+    with common.output_set(args) as files:
+        outputs = {"table": files.csv(table, "supervisor_fit.csv"),
+                   "figure": files.figure(_figure(fits, args), "supervisor_fit.png")}
     results = {"command": "supervisor fit", "input": str(path), "grid": args.grid, "grid_shape": list(shape),
                "method": args.method,
                "library_w_max": w_maxes, "radius": args.radius, "speed": args.speed, "prior": args.prior,
