@@ -233,3 +233,133 @@ def test_two_report_builds_at_once(tmp_path, monkeypatch):
         assert proc.returncode == 0, stderr
     assert (out / "REPRODUCTION.md").read_text() == reference
     assert _leftovers(out) == []
+
+
+# -- two runners on one output folder, and disk errors in one line (issue 22, section 4) -------------
+
+WAIT_FOR_RELEASE = """import time
+from mutual.compendium.paths import figures_dir
+(figures_dir() / "started").write_text("yes")
+for _ in range(600):
+    if (figures_dir() / "release").exists():
+        break
+    time.sleep(0.1)"""
+
+
+def test_a_second_runner_on_the_same_folder_stops_naming_the_first(tmp_path, out):
+    first = _runner(_notebook(tmp_path, "99_first", WAIT_FOR_RELEASE), out)
+    assert _wait_for(lambda: (out / "started").exists()), first.communicate()
+    second = _runner(_notebook(tmp_path, "99_second", "x = 1"), out, "-p", "quick=True")
+    _, stderr = second.communicate(timeout=120)
+    assert second.returncode == 1
+    line = _one_line(stderr)
+    assert f"another runner is writing to {out}" in line and f"pid {first.pid}" in line and "99_first.ipynb" in line
+    elsewhere = _runner(_notebook(tmp_path, "99_third", "x = 1"), tmp_path / "elsewhere")
+    assert elsewhere.communicate(timeout=120) and elsewhere.returncode == 0, "another folder is not locked"
+    (out / "release").write_text("go")
+    _, stderr = first.communicate(timeout=120)
+    assert first.returncode == 0, stderr
+    assert not (out / "results" / "99_second.json").exists() and not (out / "executed" / "99_second.ipynb").exists()
+    assert not (out / "executed" / "running.json").exists()
+    again = _runner(_notebook(tmp_path, "99_second", "x = 1"), out)
+    assert again.communicate(timeout=120) and again.returncode == 0, "the lock outlived its runner"
+
+
+def test_a_killed_runner_releases_the_folder(tmp_path, out):
+    first = _runner(_notebook(tmp_path, "99_first", WAIT_FOR_RELEASE), out)
+    assert _wait_for(lambda: (out / "started").exists()), first.communicate()
+    first.kill()
+    first.communicate(timeout=60)
+    (out / "release").write_text("go")   # lets the orphaned kernel finish
+    again = _runner(_notebook(tmp_path, "99_second", "x = 1"), out)
+    _, stderr = again.communicate(timeout=120)
+    assert again.returncode == 0, stderr
+
+
+def test_the_lock_is_held_within_one_process(tmp_path, monkeypatch):
+    """execute() inside main()'s lock does not lock itself out; a second holder in the process is told."""
+    import fcntl
+    from mutual.compendium.lock import OutputBusy, output_lock
+    folder = tmp_path / "o"
+    folder.mkdir()
+    with output_lock(folder, tmp_path / "info.json", "quick", ["a.ipynb"], {"quick": True}):
+        with output_lock(folder, tmp_path / "info.json", "quick", ["a.ipynb"], {"quick": True}):
+            pass
+        other = os.open(folder, os.O_RDONLY)
+        with pytest.raises(BlockingIOError):
+            fcntl.flock(other, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        os.close(other)
+    with output_lock(folder, tmp_path / "info.json", "quick", ["a.ipynb"], {}):
+        pass
+    assert OutputBusy.__doc__
+
+
+def test_output_that_is_a_file_is_one_line(tmp_path):
+    target = tmp_path / "figures.png"
+    target.write_text("not a folder")
+    proc = _runner(_notebook(tmp_path, "99_fault", "x = 1"), target)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1
+    assert f"cannot write {target}: it is a file, not a folder" in _one_line(stderr)
+    assert target.read_text() == "not a folder"
+
+
+def _in_a_tmpfs(tmp_path, options, args, notebook, prepare=""):
+    """The runner with ``--output`` on a tmpfs mounted with ``options`` in a private mount namespace."""
+    import shutil
+    if shutil.which("unshare") is None:
+        pytest.skip("needs unshare(1)")
+    mnt = tmp_path / "mnt"
+    mnt.mkdir(exist_ok=True)
+    command = " ".join([sys.executable, "-m", "mutual.compendium.notebooks", *args, "--output", str(mnt / "out"),
+                        str(notebook)])
+    script = f"mount -t tmpfs -o {options} tmpfs {mnt} && {prepare.format(mnt=mnt)} exec {command}"
+    env = {k: v for k, v in os.environ.items() if k != "MUTUAL_OUTPUT_DIR"}
+    proc = subprocess.run(["unshare", "-m", "--propagation", "private", "sh", "-c", script], capture_output=True,
+                          text=True, env=env, timeout=300)
+    if "mount:" in proc.stderr or "unshare:" in proc.stderr:
+        pytest.skip(f"mounting a tmpfs is not allowed here: {proc.stderr.strip()[:200]}")
+    return proc
+
+
+FILL_THE_DISK = """from mutual.compendium.paths import figures_dir
+with open(figures_dir() / "big.bin", "wb") as handle:
+    handle.write(b"x" * 10_000_000)"""
+
+DISKS = [  # (what, mount options, shell preparation, notebook cell, expected in the one line)
+    ("a read-only output folder", "ro,size=64k", "", "x = 1", "Read-only file system (EROFS)"),
+    ("a read-only output folder made before", "size=64k", "mkdir -p {mnt}/out && mount -o remount,ro {mnt} &&",
+     "x = 1", "Read-only file system (EROFS)"),
+    ("a full disk in a cell", "size=256k", "", FILL_THE_DISK,
+     "99_fault.ipynb failed in code cell 2 ('from mutual.compendium.paths import figures_dir'): OSError: "
+     "[Errno 28] No space left on device"),
+    ("a disk full before the run", "size=4k", "mkdir -p {mnt}/out/executed && head -c 4096 /dev/zero > {mnt}/fill;",
+     "x = 1", "No space left on device (ENOSPC)"),
+]
+
+
+@pytest.mark.parametrize("what, options, prepare, cell, expected", DISKS, ids=[d[0] for d in DISKS])
+def test_disk_errors_are_one_line_naming_the_cause(tmp_path, what, options, prepare, cell, expected):
+    proc = _in_a_tmpfs(tmp_path, options, [], _notebook(tmp_path, "99_fault", cell), prepare)
+    assert proc.returncode == 1, proc.stderr
+    line = _one_line(proc.stderr)
+    assert expected in line and line.startswith("notebook runner: "), line
+
+
+def test_a_full_disk_for_the_executed_copy_keeps_the_cells_error(tmp_path, monkeypatch):
+    """The executed copy cannot be saved after a cell failed: the line names the cell and both causes."""
+    import errno
+    from mutual.compendium import notebooks
+    monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(tmp_path / "out"))
+
+    def full(target, text):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(target))
+
+    monkeypatch.setattr(notebooks, "write_text", full)
+    with pytest.raises(notebooks.NotebookError) as err:
+        notebooks.execute(_notebook(tmp_path, "99_fault", "1 / 0"), {"quick": True})
+    message = str(err.value)
+    assert "failed in code cell 2 ('1 / 0'): ZeroDivisionError" in message and "\n" not in message
+    assert "its executed copy was not saved (cannot write" in message and "No space left on device (ENOSPC)" in message
+    with pytest.raises(notebooks.NotebookError, match="ran, but its executed copy was not saved"):
+        notebooks.execute(_notebook(tmp_path, "99_fine", "x = 1"), {"quick": True})

@@ -246,6 +246,14 @@ def private_cache(tmp_path, monkeypatch):
     return tmp_path
 
 
+def _reseal(path, fields):
+    """Write ``fields`` to ``path`` with a checksum consistent with them (as a forger would)."""
+    fields = dict(fields)
+    fields["checksum"] = np.str_(value_cache._checksum(str(fields["key"]), fields["values"], float(fields["horizon"]),
+                                                       str(fields["params"])))
+    np.savez(path, **fields)
+
+
 def _damage(path, how, other=None):
     data = path.read_bytes()
     if how == "truncated":
@@ -264,9 +272,10 @@ def _damage(path, how, other=None):
         path.write_bytes(other.read_bytes())
     elif how == "nan":  # NaN values with a checksum that matches them (a solver gone wrong)
         with np.load(path) as f:
-            key, horizon, values = str(f["key"]), float(f["horizon"]), f["values"].copy()
-        values.flat[7] = np.nan
-        np.savez(path, values=values, horizon=horizon, key=key, checksum=value_cache._checksum(key, values, horizon))
+            fields = {k: f[k] for k in f.files}
+        fields["values"] = fields["values"].copy()
+        fields["values"].flat[7] = np.nan
+        _reseal(path, fields)
     elif how == "old-format":
         with np.load(path) as f:
             np.savez(path, values=f["values"], horizon=f["horizon"])

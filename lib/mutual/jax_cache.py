@@ -17,10 +17,9 @@ wins, and an unwritable cache folder leaves the cache off (a warning once), neve
 
 import os
 import sys
-import warnings
 from pathlib import Path
 
-from .cache import cache_dir
+from .cache import cache_dir, unusable
 
 MIN_COMPILE_SECONDS = 0.0  # every compiled program (JAX's default, 1 s, would leave out most iLQR kernels)
 SETTINGS = {"jax_compilation_cache_dir": "JAX_COMPILATION_CACHE_DIR",
@@ -40,10 +39,14 @@ def use_persistent_cache(environ=os.environ):
     """Turn JAX's persistent compilation cache on in ``<cache folder>/jax`` (see the module)."""
     if environ.get("JAX_COMPILATION_CACHE_DIR"):
         return
-    folder = cache_dir() / "jax"
+    try:
+        folder = cache_dir() / "jax"
+    except OSError as err:
+        unusable("the cache folder", err, "JAX's compilation cache is off")
+        return
     if not _writable(folder):
-        warnings.warn(f"JAX's compilation cache is off: {folder} is not writable (set MUTUAL_CACHE_DIR to a "
-                      "writable folder to keep compiled programs between runs)", RuntimeWarning, stacklevel=2)
+        unusable(folder, f"{folder} is not writable", "JAX's compilation cache is off (set MUTUAL_CACHE_DIR to a "
+                 "writable folder to keep compiled programs between runs)")
         return
     values = {"jax_compilation_cache_dir": str(folder), "jax_persistent_cache_min_compile_time_secs":
               environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", str(MIN_COMPILE_SECONDS))}

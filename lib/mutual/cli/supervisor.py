@@ -137,11 +137,14 @@ def run_fit(args):
         raise common.InputError(f"--level {args.level}: must be a finite number")
     with common.about(path):
         frame = read_interventions(path)    # every column, every row, before any solve; names file, line, column
+    half_width, shape, _ = GRIDS[args.grid]
+    with common.about(path):
+        from ..supervision.supervisor import check_inside
+        check_inside(frame, half_width, path)   # before any solve: names the line, in the file's coordinates
     groups = _groups(frame, args, path)
     w_maxes = _w_maxes(args.w_max)
 
     from ..supervision import GridSpec, fit_supervisor, value_library
-    half_width, shape, _ = GRIDS[args.grid]
     with common.about("--w-max/--radius/--speed"):
         library = value_library(w_maxes, args.radius, grid_spec=GridSpec(half_width, shape), speed=args.speed,
                                 progress=not args.no_progress, method=args.method)

@@ -59,6 +59,15 @@ def save_animation(animation, name, fps=10, dpi=80):
     return saved(target)
 
 
+def _at_roundoff(df, floor, floatfmt):
+    """``df`` with every float cell below ``floor`` in magnitude written as ``"< floor"`` (:func:`~.results.roundoff`)."""
+    from .results import roundoff
+
+    def cell(v):
+        return roundoff(v, floor, floatfmt) if isinstance(v, float) and abs(v) < floor else v
+    return df.map(cell)
+
+
 def markdown_table(df, floatfmt=".3g"):
     """A pandas DataFrame as a GitHub-flavoured Markdown table."""
     def cell(v):
@@ -68,9 +77,14 @@ def markdown_table(df, floatfmt=".3g"):
     return "\n".join(lines) + "\n"
 
 
-def save_table(df, name, floatfmt=".3g"):
-    """Save a pandas DataFrame as ``<name>.csv`` and ``<name>.md``; return the paths."""
+def save_table(df, name, floatfmt=".3g", roundoff=None):
+    """Save a pandas DataFrame as ``<name>.csv`` and ``<name>.md``; return the paths.
+
+    ``roundoff`` (a floor such as ``1e-12``): float cells smaller in magnitude are written as
+    ``"< 1e-12"``, not as rounding digits that change from machine to machine."""
     _check_name(name, "table")
+    if roundoff is not None:
+        df = _at_roundoff(df, roundoff, floatfmt)
     out = figures_dir()
     csv = write_text(out / f"{name}.csv", df.to_csv(index=False, float_format=lambda v: format(v, floatfmt)))
     md = write_text(out / f"{name}.md", markdown_table(df, floatfmt))

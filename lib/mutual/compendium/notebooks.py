@@ -13,7 +13,10 @@
   naming the notebook and the cell (the executed copy keeps the traceback).
 * SIGINT and SIGTERM interrupt the running cell (so its atomic writes clean up after themselves),
   shut the kernel down, remove temporary files a killed kernel left behind, and stop with one line.
-* Kernels run with ``TQDM_DISABLE=1``: no progress bars in the executed notebooks.
+* Kernels run with ``TQDM_DISABLE=1``: no progress bars in the executed notebooks, and with numpy's
+  and OpenBLAS's code paths pinned to x86-64 with AVX2 (:mod:`.numerics`): the same bits on every
+  such machine.
+* One runner per output folder: a second one stops at once, naming the first (:mod:`.lock`).
 """
 
 import argparse
@@ -32,6 +35,8 @@ import nbformat
 
 from ..atomic import write_text
 from . import paths as _paths
+from .lock import OutputBusy, check_output_folder, disk_error, output_lock
+from .numerics import portable_env
 from .paths import OUTPUT_ENV, executed_dir, figures_dir, generated_data_dir, is_committed, results_dir
 from .runs import kernel_env, run_mode, shown
 
@@ -244,11 +249,10 @@ def execute(path, parameters=None, timeout=CELL_TIMEOUT, env=None):
 
     Raises :class:`NotebookError` (naming the notebook and the cell) when a cell raises or times
     out or the kernel dies, ValueError for undeclared parameters, and :class:`Interrupted` on
-    SIGINT/SIGTERM. ``env`` adds environment variables for the kernel.
+    SIGINT/SIGTERM. ``env`` adds environment variables for the kernel. A full disk, a read-only
+    output folder or one that is a file is a NotebookError in one line; so is an output folder another
+    runner holds (:mod:`.lock`).
     """
-    from jupyter_core.utils import ensure_event_loop
-    from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
-
     path, parameters = Path(path), dict(parameters or {})
     if not path.is_file():
         raise NotebookError(f"no notebook at {shown(path)}")
@@ -257,11 +261,24 @@ def execute(path, parameters=None, timeout=CELL_TIMEOUT, env=None):
         raise NotebookError(f"{path.name}: a {mode} run never writes the committed figures/ (only `make figures` "
                             "does); leave the output folder at its default, build/scratch")
     nb = _prepared(path, parameters)
+    try:
+        check_output_folder(figures_dir())
+        with output_lock(figures_dir(), executed_dir() / "running.json", mode, [path], parameters):
+            return _execute(nb, path, parameters, timeout, env, mode)
+    except OSError as err:
+        raise NotebookError(f"notebook {path.name}: {disk_error(err)}") from None
+
+
+def _execute(nb, path, parameters, timeout, env, mode):
+    """:func:`execute` once the output folder is checked and held."""
+    from jupyter_core.utils import ensure_event_loop
+    from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
+
     results = (results_dir() / f"{path.stem}.json", results_dir() / "extensions" / f"{path.stem}.json")
     for stale in results:
         stale.unlink(missing_ok=True)
-    kernel = {**os.environ, **KERNEL_ENV, OUTPUT_ENV: str(figures_dir().resolve()), **kernel_env(path, parameters),
-              **(env or {})}
+    kernel = {**os.environ, **KERNEL_ENV, **portable_env(), OUTPUT_ENV: str(figures_dir().resolve()),
+              **kernel_env(path, parameters), **(env or {})}
     guarded = None if is_committed() else committed_files()
     loop = ensure_event_loop()
     log_path = executed_dir() / f"{path.stem}.kernel.log"
@@ -290,19 +307,22 @@ def execute(path, parameters=None, timeout=CELL_TIMEOUT, env=None):
         removed = temporaries(started) if (run.signum or run.killed or run.exit_status is not None) else []
         for leftover in removed:
             leftover.unlink(missing_ok=True)
-        write_text(executed_dir() / path.name, nbformat.writes(nb))
+        unsaved = _save_executed(nb, path)
     if run.signum is not None or error:  # results of a run that did not finish are not results
         for partial in results:
             partial.unlink(missing_ok=True)
     where = f"notebook {path.name}, {_cell_label(nb, run.cell)}"
     cleaned = f"; removed {len(removed)} temporary file(s) the kernel left" if removed else ""
+    if unsaved and not error and run.signum is None:
+        raise NotebookError(f"notebook {path.name} ran, but {unsaved}")
+    cleaned += f"; {unsaved}" if unsaved else ""
     if run.signum is not None:
         raise Interrupted(f"stopped by {signal.Signals(run.signum).name} in {where}; it left no results{cleaned}",
                           run.signum)
     if error == "the kernel died" or (error and run.exit_status is not None):
         raise NotebookError(f"{where}: the kernel died ({_kernel_death(run)}; its log: {shown(log_path)}){cleaned}")
     if error:
-        raise NotebookError(f"notebook {path.name} failed in {_cell_label(nb, run.cell)}: {error}")
+        raise NotebookError(f"notebook {path.name} failed in {_cell_label(nb, run.cell)}: {error}{cleaned}")
     if guarded is not None:
         after = committed_files()
         touched = sorted(shown(f) for f in set(guarded) | set(after) if guarded.get(f) != after.get(f))
@@ -311,6 +331,15 @@ def execute(path, parameters=None, timeout=CELL_TIMEOUT, env=None):
                                 f"{' ...' if len(touched) > 5 else ''} in a {mode} run (outputs go to "
                                 f"{shown(figures_dir())}): write through figures_dir() and generated_data_dir()")
     return nb
+
+
+def _save_executed(nb, path):
+    """Save the executed copy; on a disk error, say so (one clause) instead of hiding the cell's error."""
+    try:
+        write_text(executed_dir() / path.name, nbformat.writes(nb))
+    except OSError as err:
+        return f"its executed copy was not saved ({disk_error(err)})"
+    return ""
 
 
 def ordered(paths):
@@ -354,20 +383,28 @@ def main(argv=None):
         if is_committed() and run_mode(parameters) != "full":
             raise NotebookError("quick runs and runs with other parameters never write the committed figures/ "
                                 "(only `make figures` does): leave the output folder at its default, build/scratch")
-        print(f"==> {run_mode(parameters)} run, outputs to {shown(figures_dir())}", flush=True)
-        for i, path in enumerate(todo, 1):
-            print(f"==> [{i}/{len(todo)}] {path.name}", flush=True)
-            start = time.time()
-            execute(path, parameters)
-            print(f"    done in {time.time() - start:.0f} s", flush=True)
+        check_output_folder(figures_dir())
+        with output_lock(figures_dir(), executed_dir() / "running.json", run_mode(parameters), todo, parameters):
+            _run_all(todo, parameters)
+    except OSError as err:
+        sys.exit(f"notebook runner: {disk_error(err)}")
     except Interrupted as err:
         print(f"notebook runner: {err}", file=sys.stderr)
         sys.exit(128 + err.signum)
     except KeyboardInterrupt:
         print("notebook runner: stopped by SIGINT between notebooks", file=sys.stderr)
         sys.exit(128 + signal.SIGINT)
-    except (NotebookError, ValueError) as err:
+    except (NotebookError, OutputBusy, ValueError) as err:
         sys.exit(f"notebook runner: {err}")
+
+
+def _run_all(todo, parameters):
+    print(f"==> {run_mode(parameters)} run, outputs to {shown(figures_dir())}", flush=True)
+    for i, path in enumerate(todo, 1):
+        print(f"==> [{i}/{len(todo)}] {path.name}", flush=True)
+        start = time.time()
+        execute(path, parameters)
+        print(f"    done in {time.time() - start:.0f} s", flush=True)
 
 
 if __name__ == "__main__":

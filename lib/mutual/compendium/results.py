@@ -21,6 +21,29 @@ from .paths import results_dir, saved
 from .runs import run_record
 
 
+ROUNDOFF = 1e-12   # below this a difference of float64 results is rounding, not a result
+
+
+def roundoff(value, floor=ROUNDOFF, fmt=".2g"):
+    """``value`` as text that reads the same on every machine: ``"< 1e-12"`` when its magnitude is
+    below ``floor`` (rounding noise, whose digits change with the CPU, the BLAS kernels and the
+    thread count), else ``format(value, fmt)``. For gaps, residuals and checks that should be zero,
+    in notes, tables and printed lines; ``floor`` sits well above the noise of the computation
+    (``ROUNDOFF`` for float64 identities; a solver's tolerance for an optimiser's answer).
+    NaN and infinity are refused (a check that produced them did not hold)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f"roundoff: value must be a real number, got {value!r}")
+    if not math.isfinite(value) or not (isinstance(floor, numbers.Real) and math.isfinite(floor) and floor > 0):
+        raise ValueError(f"roundoff: value and floor must be finite (floor > 0), got {value!r} and {floor!r}")
+    if abs(value) < floor:
+        text = f"{floor:g}"
+        if "e" in text:
+            mantissa, exponent = text.split("e")
+            text = f"{mantissa}e{int(exponent)}"
+        return f"< {text}"
+    return format(float(value), fmt)
+
+
 def _plain(value):
     """Convert numpy scalars and arrays into JSON values, rounding floats to 10 significant digits."""
     if isinstance(value, (bool, np.bool_)):

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
+from ..seeds import generator
 from .mdp import MDP, check_mask, soft_policy
 
 
@@ -99,7 +100,7 @@ def sample_demonstrations(mdp, n, mask=None, rng=None):
         raise ValueError(f"n: must be a positive integer, got {n!r}")
     if not isinstance(mdp, MDP):
         raise TypeError(f"mdp: must be an MDP, got {type(mdp).__name__}")
-    rng = np.random.default_rng(rng)
+    rng = generator(rng, "rng")
     pi = soft_policy(mdp, check_mask(mdp, mask))
     if np.any(pi[0].sum(axis=1)[mdp.initial > 0] == 0):
         raise ValueError("mask: no trajectory from some initial state satisfies the constraints (V = -inf)")
@@ -162,6 +163,11 @@ def _integers(df, column, path, allow_empty=False):
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise ValueError(f"{path}, line {i + 2}, column {column!r}: {df[column].iloc[i]!r} is not an integer")
+    huge = np.abs(np.nan_to_num(values)) > 2 ** 53     # beyond exact floats (and any index): never wrap around
+    if huge.any():
+        i = int(np.flatnonzero(huge)[0])
+        raise ValueError(f"{path}, line {i + 2}, column {column!r}: {df[column].iloc[i]!r} is too large "
+                         f"(|{column}| <= 2^53)")
     return values
 
 

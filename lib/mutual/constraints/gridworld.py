@@ -8,7 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .mdp import MDP
+from .mdp import MAX_VALUE, MDP
+
+MAX_BYTES = 4 * 2 ** 30   # the memory one world may ask for (dense S and the soft policy): 4 GiB
 
 GRID_ACTIONS = ("E", "NE", "N", "NW", "W", "SW", "S", "SE", "loiter")
 GRID_DELTAS = np.array([(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1), (0, 0)])
@@ -64,6 +66,34 @@ def _cell(name, value, width, height):
     return int(c), int(r)
 
 
+def _gib(n_bytes):
+    return f"{n_bytes / 2 ** 30:.3g} GiB"
+
+
+def size_problem(width, height, horizon, sparse=False):
+    """``(key, reason)`` when a world this large would ask for more than ``MAX_BYTES`` of memory, else None.
+
+    Counted before anything is allocated: the dense transitions S (``|X|^2 |A|`` floats; the sparse
+    S has at most 9 entries per row) and the soft policy and values (``2 (T + 1) |X| |A|`` floats).
+    """
+    X, A = width * height, len(GRID_ACTIONS)
+    transitions = 8 * (X * A * 9 * 2 if sparse else X * X * A)
+    if transitions > MAX_BYTES:
+        return "width" if width >= height else "height", (f"a {width} x {height} world needs {_gib(transitions)} for its transitions "
+                         f"(|X|^2 |A| = {X}^2 x {A} numbers), over the limit of {_gib(MAX_BYTES)}; use a smaller grid")
+    policy = 8 * 2 * (horizon + 1) * X * A
+    if transitions + policy > MAX_BYTES:
+        return "horizon", (f"horizon {horizon} on a {width} x {height} world needs {_gib(transitions + policy)} for "
+                           f"its soft policy and values (2 (T + 1) |X| |A| numbers), over the limit of "
+                           f"{_gib(MAX_BYTES)}; use a shorter horizon")
+    return None
+
+
+def miss_penalty_limit(horizon):
+    """The largest ``miss_penalty`` whose soft values stay representable (``MAX_VALUE`` of the MDP)."""
+    return MAX_VALUE - horizon * float(np.sqrt(2))
+
+
 def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=50.0, sparse=False, loiter="goal"):
     """The thesis's gridworld (Section 3.3).
 
@@ -87,6 +117,7 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
     start, goal = _cell("start", start, width, height), _cell("goal", goal, width, height)
     if isinstance(slip, bool) or not isinstance(slip, numbers.Real) or not 0 <= slip <= 1:
         raise ValueError(f"slip: must be a number in [0, 1], got {slip!r}")
+    slip = float(slip)     # a float32 slip would make S float32, whose rows sum to 1 only to 1e-7
     if isinstance(miss_penalty, bool) or not isinstance(miss_penalty, numbers.Real) or not (
             np.isfinite(miss_penalty) and miss_penalty >= 0):
         raise ValueError(f"miss_penalty: must be a finite number >= 0 (a penalty for missing the goal), "
@@ -94,6 +125,12 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
     if loiter not in LOITER_RULES:
         raise ValueError(f"loiter: must be one of {LOITER_RULES}, got {loiter!r}")
     horizon = 2 * max(width, height) if horizon is None else _integer("horizon", horizon, 1)
+    if miss_penalty > miss_penalty_limit(horizon):
+        raise ValueError(f"miss_penalty: {miss_penalty:g} is too large (at most {miss_penalty_limit(horizon):.3g}: "
+                         "soft values this large lose every digit of the policy)")
+    problem = size_problem(width, height, horizon, sparse)
+    if problem:
+        raise ValueError(f"{problem[0]}: {problem[1]}")
     X, A = width * height, len(GRID_ACTIONS)
     col, row = np.arange(X) % width, np.arange(X) // width
     nc, nr = col[:, None] + GRID_DELTAS[None, :8, 0], row[:, None] + GRID_DELTAS[None, :8, 1]

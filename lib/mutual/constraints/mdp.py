@@ -113,8 +113,18 @@ def _float_array(value, name):
         raise ValueError(f"{name}: must be an array of numbers, got {type(value).__name__}") from None
 
 
+def _tolerance(S, n_states):
+    """How far a row of S may sum from 1: ``_ATOL``, or the rounding of S's own dtype (a float32 S
+    given with rows that sum to 1 in float32 is stochastic; it is renormalised in float64)."""
+    dtype = S.dtype if hasattr(S, "dtype") else np.asarray(S).dtype
+    if np.issubdtype(dtype, np.floating) and np.finfo(dtype).eps > np.finfo(float).eps:
+        return max(_ATOL, (n_states + 1) * float(np.finfo(dtype).eps))
+    return _ATOL
+
+
 def _check_transitions(S):
     """Return S as a ``(X*A, X)`` float array or CSR matrix, checking it is stochastic."""
+    original = S
     if sp.issparse(S):
         if S.ndim != 2 or S.shape[1] == 0 or S.shape[0] == 0 or S.shape[0] % S.shape[1]:
             raise ValueError(f"transitions: a sparse S must have shape (X*A, X), got {S.shape}")
@@ -133,10 +143,14 @@ def _check_transitions(S):
         values, row_sums = P, P.sum(axis=1)
     if not np.all(np.isfinite(values)) or np.any(values < 0):
         raise ValueError("transitions: S must be finite and non-negative")
-    bad = np.flatnonzero(np.abs(row_sums - 1.0) > _ATOL)
+    tolerance = _tolerance(original, n_states)
+    bad = np.flatnonzero(np.abs(row_sums - 1.0) > tolerance)
     if bad.size:
         x, a = divmod(int(bad[0]), P.shape[0] // n_states)
         raise ValueError(f"transitions: S(x, a, .) must sum to 1; S({x}, {a}, .) sums to {row_sums[bad[0]]:.6g}")
+    if tolerance > _ATOL:     # a lower-precision S: make its rows sum to 1 in float64
+        P = sp.diags(1.0 / row_sums) @ P if sp.issparse(P) else P / row_sums[:, None]
+        P = sp.csr_matrix(P) if sp.issparse(P) else P
     return P, n_states, P.shape[0] // n_states
 
 

@@ -21,7 +21,7 @@ States are numbered ``col + width * row``; actions follow
 import math
 
 from ..tomlfile import read_toml
-from .gridworld import gridworld
+from .gridworld import gridworld, miss_penalty_limit, size_problem
 
 LOITER_RULES = ("goal", "anywhere")
 _KEYS = ("width", "height", "start", "goal", "slip", "horizon", "miss_penalty", "loiter")
@@ -82,6 +82,13 @@ def world_from_mapping(mapping, source="world"):
     loiter = mapping.get("loiter", "goal")
     if loiter not in LOITER_RULES:
         _fail(source, "loiter", f"must be one of {list(LOITER_RULES)}, got {loiter!r}")
+    steps = horizon if horizon is not None else 2 * max(width, height)
+    problem = size_problem(width, height, steps)     # before anything is allocated
+    if problem:
+        _fail(source, problem[0] if problem[0] != "horizon" or horizon is not None else "width", problem[1])
+    if miss_penalty > miss_penalty_limit(steps):
+        _fail(source, "miss_penalty", f"{miss_penalty:g} is too large (at most {miss_penalty_limit(steps):.3g}: soft "
+                                      "values this large lose every digit of the policy)")
     return gridworld(width, height, start, goal, slip=slip, horizon=horizon, miss_penalty=miss_penalty,
                      loiter=loiter)
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..supervision.dubins import TRUE_W_MAX, dubins_step
+from ..supervision.dubins import TRUE_W_MAX, dubins_step, wrap_angle
 from ..supervision.reachability import ValueFunction
 from ..supervision.supervisor import NoisySupervisor
 
@@ -249,7 +249,7 @@ def _drive(b, teams, config):
     stack, alpha = teams
     n, R, _ = b.robots.shape
     bearing = np.arctan2(b.goal_y - b.robots[..., 1], b.goal_x - b.robots[..., 0])
-    u = np.clip(config.heading_gain * np.angle(np.exp(1j * (bearing - b.robots[..., 2]))), -TRUE_W_MAX, TRUE_W_MAX)
+    u = np.clip(config.heading_gain * wrap_angle(bearing - b.robots[..., 2]), -TRUE_W_MAX, TRUE_W_MAX)
     nxt = dubins_step(b.robots.reshape(-1, 3), u.ravel(), config.dt).reshape(n, R, 3)
     v_next = stack.interp(_relative(nxt, b.obs)) - alpha - config.filter_margin
     v_next = np.where(b.detected, v_next, np.inf)

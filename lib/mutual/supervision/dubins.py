@@ -102,7 +102,10 @@ def unsafe_reach(w_max, radius, speed=SPEED):
     _check_positive("w_max", w_max)
     _check_positive("radius", radius)
     _check_positive("speed", speed)
-    return float(np.sqrt(2 * speed / w_max * radius + radius ** 2))
+    if radius < 1e150 and speed / w_max < 1e150:
+        return float(np.sqrt(2 * speed / w_max * radius + radius ** 2))
+    with np.errstate(over="ignore"):     # sqrt(r) sqrt(2 R + r): no overflow of r^2 (or inf) for huge radii
+        return float(np.sqrt(np.float64(radius)) * np.sqrt(2 * (np.float64(speed) / w_max) + radius))
 
 
 def avoid_value_closed_form(states, w_max, radius, speed=SPEED, tol=1e-9):
@@ -132,6 +135,12 @@ def rotate_to_heading(states, heading=0.0):
     return np.stack([c * s[:, 0] - sn * s[:, 1], sn * s[:, 0] + c * s[:, 1], np.full(len(s), float(heading))], 1)
 
 
+def wrap_angle(angle):
+    """``angle`` wrapped to ``[-pi, pi)`` by exact modular arithmetic (no arctan2: its last bit depends
+    on the CPU numpy dispatches to, which moved the chapter 5 figures between machines)."""
+    return np.remainder(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) - np.pi
+
+
 def dubins_step(states, controls, dt, speed=SPEED):
     """Integrate eq. (5.1) exactly over ``dt`` with constant turn rates ``controls`` (vectorised over cars)."""
     s = check_states(states)
@@ -150,4 +159,4 @@ def dubins_step(states, controls, dt, speed=SPEED):
     mid = theta + turn / 2
     x = s[:, 0] + chord * np.cos(mid)
     y = s[:, 1] + chord * np.sin(mid)
-    return np.stack([x, y, np.angle(np.exp(1j * (theta + turn)))], axis=1)
+    return np.stack([x, y, wrap_angle(theta + turn)], axis=1)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..seeds import generator
 from .control import wilson_interval
 from .dubins import TRUE_W_MAX, _check_positive, _real, check_states
 from .supervisor import NoisySupervisor, collect_interventions
@@ -179,7 +180,8 @@ def fit_supervisor(library, states, prior="mle", reference=None):
     outside = np.isnan(values[0])
     if outside.any():
         raise ValueError(f"states: {outside.sum()} interventions lie outside the library's grid "
-                         f"(|x|, |y| <= {library.grid_spec.half_width}), e.g. {s[outside][0].tolist()}")
+                         f"(|x|, |y| <= {library.grid_spec.half_width} around the obstacle centre), e.g. the state "
+                         f"{s[outside][0].tolist()} relative to it")
     mus = values.mean(axis=1)
     if prior == "map":
         if reference is None:
@@ -248,7 +250,7 @@ def recovery_study(library, generators, n_values, seeds, start_distance, prior="
     for w_max, mu, sigma in generators:
         sup = NoisySupervisor(library[library.index_of(w_max)], mu, sigma)
         for seed in seeds:
-            rng = np.random.default_rng(seed)
+            rng = generator(seed, "seeds")
             states = collect_interventions(sup, n_values[-1], rng, start_distance)
             for n in n_values:
                 with warnings.catch_warnings():

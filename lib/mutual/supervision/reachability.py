@@ -13,6 +13,9 @@ soon as it converges). The grid, the value function and the library are in :mod:
 """
 
 import functools
+import hashlib
+import inspect
+import platform
 from dataclasses import dataclass
 
 import hj_reachability as hj
@@ -24,10 +27,12 @@ import pandas as pd
 from tqdm import tqdm
 
 from .. import __version__
-from . import value_cache
+from . import value_cache, value_function
 from .dubins import SPEED, DubinsCar, _check_positive, _real, unsafe_reach
 from .value_function import (FULL_GRID, METHODS, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary,  # noqa: F401
                              unsafe_set_contains)
+
+PLAUSIBLE_REACH_CELLS = 1.0   # a cached member's head-on reach must match the closed form within this many cells
 
 ACCURACIES = ("low", "medium", "high", "very_high")
 
@@ -97,21 +102,57 @@ def _converge(w_maxes, radius, speed, d_max, spec, solver, batch, progress):
                 yield float(wi), v, -t
 
 
+@functools.lru_cache(maxsize=None)
+def solver_code_version():
+    """SHA-256 (16 hex digits) of the source of everything that computes a member's values: the
+    dynamics, the grid, the initial values, the compiled step and the convergence loop. Part of the
+    cache key, so that a change to the solver's code never serves values of the old code."""
+    parts = (DubinsCar, value_function.GridSpec, value_function._hj_grid, _chunk_stepper, _initial_values, _converge)
+    digest = hashlib.sha256()
+    for part in parts:
+        digest.update(inspect.getsource(inspect.unwrap(part)).encode())
+    return digest.hexdigest()[:16]
+
+
 def _versions():
     return {"jax": jax.__version__, "jaxlib": jaxlib.__version__, "hj_reachability": hj.__version__,
-            "numpy": np.__version__, "mutual": __version__}
+            "numpy": np.__version__, "mutual": __version__, "python": platform.python_version(),
+            "solver_code": solver_code_version()}
+
+
+def cache_params(w_max, radius, speed, d_max, spec, solver):
+    """Everything that makes a member's values (stored in its cache file and checked on load)."""
+    return value_cache.cache_params(w_max, radius, speed, d_max, spec, solver, _versions())
 
 
 def cache_key(w_max, radius, speed, d_max, spec, solver):
-    """Hex digest of everything that changes a member: dynamics, obstacle, grid, solver, package versions."""
+    """Hex digest of everything that makes a member: dynamics, obstacle, grid, solver, versions, solver code."""
     return value_cache.cache_key(w_max, radius, speed, d_max, spec, solver, _versions())
 
 
+def plausibility_check(w_max, radius, speed, d_max, spec):
+    """A check of cached values against the physics, independent of the file's own records: the unsafe
+    set's head-on reach must match the closed form ``sqrt(2 R r + r^2)`` within ``PLAUSIBLE_REACH_CELLS``
+    grid cells (a disturbance only enlarges it: then it must not fall short). Catches another member's
+    values stored under this member's key, parameters and a recomputed checksum."""
+    expected = unsafe_reach(w_max, radius, speed)
+    tolerance = PLAUSIBLE_REACH_CELLS * spec.spacings[0]
+
+    def check(values):
+        reach = ValueFunction(w_max, radius, spec, values, speed, d_max).head_on_reach()
+        if reach < expected - tolerance or (d_max == 0 and reach > expected + tolerance):
+            raise ValueError(f"its unsafe set reaches {reach:.3f} ahead of the obstacle, where w_max={w_max:g}, "
+                             f"radius {radius:g} give {expected:.3f} (closed form; tolerance {tolerance:.3f}): "
+                             "these are another member's values")
+    return check
+
+
 def _check_domain(w_maxes, radius, speed, spec):
-    need = unsafe_reach(float(np.min(w_maxes)), radius, speed) + 4 * spec.spacings[0]
+    reach = unsafe_reach(float(np.min(w_maxes)), radius, speed)
+    need = reach + 4 * spec.spacings[0]
     if spec.half_width < need:
         raise ValueError(f"grid_spec.half_width={spec.half_width} is too small: the unsafe set of w_max="
-                         f"{np.min(w_maxes):g} reaches {unsafe_reach(float(np.min(w_maxes)), radius, speed):.3g} "
+                         f"{np.min(w_maxes):g} (obstacle radius {radius:g}, speed {speed:g}) reaches {reach:.3g} "
                          f"from the obstacle centre; need at least {need:.3g} (reach + 4 cells)")
 
 
@@ -182,11 +223,13 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
                                       closed_form_values(wi, obstacle_radius, grid_spec, speed), float(speed), 0.0,
                                       float("inf"), method) for wi in w)
         return ValueLibrary(members)
+    params = {wi: cache_params(wi, obstacle_radius, speed, d_max, grid_spec, solver) for wi in w}
     keys = {wi: cache_key(wi, obstacle_radius, speed, d_max, grid_spec, solver) for wi in w}
     found = {}
     if cache:
         for wi, key in keys.items():
-            stored = value_cache.load_member(key, grid_spec.shape)
+            check = plausibility_check(wi, obstacle_radius, speed, d_max, grid_spec)
+            stored = value_cache.load_member(key, grid_spec.shape, params[wi], check)
             if stored is not None:
                 found[wi] = stored
     missing = [wi for wi in w if wi not in found]
@@ -194,7 +237,7 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
         for wi, v, h in _converge(missing, obstacle_radius, speed, d_max, grid_spec, solver, batch, progress):
             found[wi] = (v, h)
             if cache:
-                value_cache.save_member(keys[wi], v, h)
+                value_cache.save_member(keys[wi], v, h, params[wi])
     members = tuple(ValueFunction(float(wi), float(obstacle_radius), grid_spec, found[wi][0], float(speed),
                                   float(d_max), found[wi][1], method) for wi in w)
     return ValueLibrary(members)

@@ -27,15 +27,14 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from .dubins import SPEED, _check_positive, _real, check_states
+from .dubins import SPEED, _check_positive, _real, check_states, wrap_angle
 from .value_function import ValueFunction
 
 REQUIRED_COLUMNS = ("participant", "trial", "time", "x", "y", "theta")
 OPTIONAL_COLUMNS = ("obstacle_x", "obstacle_y")
 
 
-def _wrap(theta):
-    return (np.asarray(theta, dtype=float) + np.pi) % (2 * np.pi) - np.pi
+_wrap = wrap_angle
 
 
 def _check_rng(rng):
@@ -258,7 +257,26 @@ def validate_interventions(frame, source=None):
         raise ValueError(f"{where}{_row(frame, bad[0], source)}, column 'time': {out['time'].iloc[bad[0]]:g} is "
                          "negative (seconds since the scene started)")
     out["theta"] = _wrap(out["theta"])
+    out.attrs["lines"] = lines
     return out
+
+
+def check_inside(frame, half_width, source=None):
+    """Refuse an interventions table (as :func:`validate_interventions` returns it) with a row outside
+    the value functions' grid, ``|x - obstacle_x|, |y - obstacle_y| <= half_width``: the error names
+    the first such row, its line of the file and its position as the file writes it."""
+    where = f"{source}: " if source is not None else "interventions: "
+    dx, dy = (frame["x"] - frame["obstacle_x"]).to_numpy(), (frame["y"] - frame["obstacle_y"]).to_numpy()
+    outside = np.flatnonzero(np.maximum(np.abs(dx), np.abs(dy)) > half_width)
+    if len(outside):
+        i = outside[0]
+        row = frame.iloc[i]
+        at = f"x = {row['x']:g}, y = {row['y']:g}"
+        centre = f" around the obstacle at ({row['obstacle_x']:g}, {row['obstacle_y']:g})" if (
+            row["obstacle_x"] or row["obstacle_y"]) else ""
+        more = f" ({len(outside) - 1} more rows like it)" if len(outside) > 1 else ""
+        raise ValueError(f"{where}{_row(frame, i, source)}: the intervention at {at} lies outside the value "
+                         f"functions' grid, |x - obstacle_x|, |y - obstacle_y| <= {half_width:g}{centre}{more}")
 
 
 def read_interventions(path):
