@@ -22,10 +22,10 @@ os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
 os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
-from mutual.compendium.paths import NOTEBOOKS, figures_dir, results_dir
+from mutual.compendium.paths import NOTEBOOKS
 
 
-NOTEBOOK_TIMEOUT = 900  # seconds per cell of a quick run
+LANE_OUTPUT = Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "notebooks"  # the lane's own: a runner holds its folder
 _CALLS = re.compile(r"executed_notebook\(\s*[\"'](\d\d_\w+)[\"']")
 
 
@@ -46,7 +46,7 @@ class NotebookLane:
             for stem in self.stems:
                 if self.stopped:
                     break
-                command = [sys.executable, "-m", "mutual.compendium.notebooks", "--quick",
+                command = [sys.executable, "-m", "mutual.compendium.notebooks", "--quick", "--output", str(LANE_OUTPUT),
                            str(NOTEBOOKS / f"{stem}.ipynb")]
                 self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
                 out, err = self.process.communicate()
@@ -110,7 +110,8 @@ def pytest_sessionfinish(session):
 def executed_notebook(pytestconfig):
     """``executed_notebook(stem)`` waits for the quick run of ``notebooks/<stem>.ipynb`` (the
     notebook lane ran it in a fresh kernel with ``quick=True``) and returns its results
-    ``{claim_id: entry}``; the executed notebooks are in ``executed_notebook.nodes``."""
+    ``{claim_id: entry}``; the executed notebooks are in ``executed_notebook.nodes``, their
+    outputs (figures, tables, results) in ``executed_notebook.folder``."""
     lane = pytestconfig._notebook_lane
     nodes = {}
 
@@ -121,9 +122,9 @@ def executed_notebook(pytestconfig):
         if status != 0:
             pytest.fail(f"{stem}: {' '.join(why) or f'the runner exited with status {status}'}")
         if stem not in nodes:
-            nodes[stem] = nbformat.read(str(figures_dir() / "executed" / f"{stem}.ipynb"), as_version=4)
-        path = results_dir() / f"{stem}.json"
+            nodes[stem] = nbformat.read(str(LANE_OUTPUT / "executed" / f"{stem}.ipynb"), as_version=4)
+        path = LANE_OUTPUT / "results" / f"{stem}.json"
         return json.loads(path.read_text())["claims"] if path.exists() else {}
 
-    run.nodes = nodes
+    run.nodes, run.folder = nodes, LANE_OUTPUT
     return run
