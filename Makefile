@@ -3,6 +3,8 @@ PYTHON ?= python3.11
 VENV   := .venv
 BIN    := $(VENV)/bin
 READY  := $(VENV)/.ready
+PEERS       := .venv-peers
+PEERS_READY := $(PEERS)/.ready
 
 NOTEBOOKS := $(wildcard notebooks/[0-9][0-9]_*.ipynb)
 
@@ -20,7 +22,7 @@ NBSTRIP := $(BIN)/python -m mutual.compendium.hygiene
 LABFLAGS   ?=
 ALLOW_ROOT := $(if $(filter 0,$(shell id -u)),--allow-root)
 
-.PHONY: figures test bench bench-quick lab book test-browser lock clean distclean env git-filter
+.PHONY: figures test bench bench-quick bench-peers lab book test-browser lock lock-peers clean distclean env git-filter
 
 ## figures: run every notebook (full parameters), rebuild figures/, data/ and figures/REPRODUCTION.md;
 ##          the only command that writes them (and the README's verdict counts)
@@ -42,6 +44,17 @@ bench: $(READY)
 
 bench-quick:
 	$(MAKE) bench QUICK=1
+
+## bench-peers: our solvers and statistics against crocoddyl (FDDP), CasADi + IPOPT and pingouin, in a
+##              separate pinned environment $(PEERS) (bench/peers/requirements.lock, about 2.5 GB; never
+##              part of environment.lock); writes its own section of figures/benchmarks.md, which
+##              `make bench` keeps (and this keeps `make bench`'s); QUICK=1: small sizes, to build/bench/;
+##              JAX compiles into an empty cache (build/bench/peers-jax), so compile times are cold; the
+##              peers run on one OpenMP/BLAS thread (their fastest for these small problems here)
+bench-peers: $(PEERS_READY)
+	rm -rf build/bench/peers-jax
+	JAX_COMPILATION_CACHE_DIR=$(CURDIR)/build/bench/peers-jax OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
+		$(PEERS)/bin/python bench/run.py --peers $(if $(QUICK),--quick)
 
 ## lab: JupyterLab on notebooks/00_overview.ipynb with the kernel "mutual"; what you run there
 ##      writes to build/scratch/, never to figures/, and notebooks/ are saved without outputs
@@ -89,6 +102,15 @@ $(READY): environment.lock pyproject.toml
 	$(BIN)/python -m ipykernel install --sys-prefix --name mutual --display-name "Python (mutual)"
 	@touch $@
 
+# The peers' environment (bench-peers): its own lock, and `mutual` editable without its dependencies
+$(PEERS_READY): bench/peers/requirements.lock pyproject.toml
+	@echo "==> installing the peers bench environment into $(PEERS) (hash-checked, from bench/peers/requirements.lock)"
+	@test -x $(PEERS)/bin/python || $(PYTHON) -m venv $(PEERS)
+	$(PEERS)/bin/python -m pip install --disable-pip-version-check --progress-bar off \
+		--require-hashes --no-deps -r bench/peers/requirements.lock
+	$(PEERS)/bin/python -m pip install --disable-pip-version-check --no-deps --no-build-isolation -e .
+	@touch $@
+
 ## lock: recompile environment.lock from requirements.in (pins and hashes, Python 3.11);
 ##       keeps current pins where they still fit; `make lock LOCKFLAGS=--upgrade` upgrades all
 lock:
@@ -97,11 +119,19 @@ lock:
 	build/lock-tools/bin/pip-compile --generate-hashes --allow-unsafe --strip-extras \
 		--no-emit-index-url $(LOCKFLAGS) -o environment.lock requirements.in
 
+## lock-peers: recompile bench/peers/requirements.lock from bench/peers/requirements.in (constrained
+##             to environment.lock's pins, so shared packages match the runtime's versions)
+lock-peers:
+	@test -x build/lock-tools/bin/pip-compile || \
+		($(PYTHON) -m venv build/lock-tools && build/lock-tools/bin/pip install -q pip-tools)
+	build/lock-tools/bin/pip-compile --generate-hashes --allow-unsafe --strip-extras \
+		--no-emit-index-url $(LOCKFLAGS) -o bench/peers/requirements.lock bench/peers/requirements.in
+
 ## clean: remove executed notebooks, caches and build products (keeps the environment)
 clean:
 	rm -rf build .cache .pytest_cache
 	find . -name __pycache__ -not -path "./$(VENV)/*" -prune -exec rm -rf {} +
 
-## distclean: clean, and remove the environment too
+## distclean: clean, and remove the environments too
 distclean: clean
-	rm -rf $(VENV)
+	rm -rf $(VENV) $(PEERS)

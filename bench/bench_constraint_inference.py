@@ -4,7 +4,9 @@ Rows:
 1. Algorithm 4 ranking of all state and action candidates on a 20 x 20 gridworld (T = 40): the
    compiled stencil backup (``engine="jax"``) against a fair baseline, an imitation-style
    ``mce_partition_fh`` (dense ``S @ V`` and ``scipy.special.logsumexp``, one candidate at a time),
-   float64, equal values and identical ranking checked; the numpy engine beside it.
+   float64, equal values and identical ranking checked; the numpy engine beside it. The baseline's
+   time varies from run to run (49x-119x were seen), so the ratio is the median of 5 alternating
+   rounds (ours, then the baseline), reported with its range.
 2. The literal pseudocode loop of Algorithm 4 ("pseudocode" row, small case).
 3. Algorithm 2 (Scobee and Sastry's forward accrual) against Algorithm 4 on deterministic dynamics.
 4. Full greedy inference (all rounds to the stop rule) on large worlds, T = 2 x side: 60 x 60 under
@@ -85,6 +87,19 @@ def _baseline_child(side, threads, n):
     return float(out.stdout.strip().splitlines()[-1])
 
 
+ROUNDS = {False: 5, True: 3}  # alternating rounds of ours and the baseline (the baseline's time varies run to run)
+
+
+def _ranking_round(mdp, masks, side, K, quick, thread_counts=(1, 2)):
+    """One round: our compiled ranking (best of 3), then the baseline in a fresh process per BLAS
+    thread count (the faster counts); the ratio of the two for all ``K`` candidates."""
+    fast = best_time(lambda: log_partition(mdp, masks, engine="jax"), 3)
+    timings = {threads: _baseline_child(side, threads, 12 if not quick else 6) for threads in thread_counts}
+    threads = min(timings, key=timings.get)
+    return dict(fast=fast, per=timings[threads], threads=threads, timings=timings,
+                ratio=timings[threads] * K / fast)
+
+
 def ranking_rows(quick):
     side = 10 if quick else 20
     g, demos = _world(side)
@@ -94,13 +109,14 @@ def ranking_rows(quick):
     t0 = time.perf_counter()
     V = log_partition(g.mdp, masks, engine="jax")
     first = time.perf_counter() - t0
-    fast = best_time(lambda: log_partition(g.mdp, masks, engine="jax"), 3)
-    numpy_engine = best_time(lambda: log_partition(g.mdp, masks, engine="numpy"), 1 if not quick else 2)
     S, K = g.mdp.dense_transitions(), masks.shape[2]
     mask_all = masks & g.mdp.allowed[:, :, None]
-    timings = {threads: _baseline_child(side, threads, 12 if not quick else 6) for threads in (1, 2)}
-    threads = min(timings, key=timings.get)
-    per = timings[threads]
+    rounds = [_ranking_round(g.mdp, masks, side, K, quick)]  # the first round picks the baseline's faster thread count
+    rounds += [_ranking_round(g.mdp, masks, side, K, quick, (rounds[0]["threads"],)) for _ in range(ROUNDS[quick] - 1)]
+    ratios = np.array([r["ratio"] for r in rounds])
+    mid = rounds[int(np.argsort(ratios)[len(ratios) // 2])]  # the round with the median ratio
+    fast, per, threads, timings = mid["fast"], mid["per"], mid["threads"], rounds[0]["timings"]
+    numpy_engine = best_time(lambda: log_partition(g.mdp, masks, engine="numpy"), 1 if not quick else 2)
     base = np.stack([imitation_partition(S, g.mdp.reward, g.mdp.terminal_reward, g.mdp.horizon, mask_all[:, :, k])
                      for k in range(K)], axis=1)
     finite = np.isfinite(base)
@@ -109,10 +125,12 @@ def ranking_rows(quick):
     same_rank = bool(np.array_equal(np.argsort(base[start], kind="stable"), np.argsort(V[start], kind="stable")))
     agree = f"max |dV| {gap:.1e}, same -inf pattern {same_inf}, identical ranking at the start {same_rank} (float64)"
     case = f"Alg. 4 ranking, {side}x{side}, all {K} state and action candidates, T={g.mdp.horizon}"
-    rows = [_row(case + " (compiled stencil, jax)", fast, "imitation-style mce_partition_fh: dense S @ V + scipy "
-                 f"logsumexp, one candidate at a time (BLAS threads {threads}, the faster of 1 and 2: "
-                 f"{timings[1] * K:.1f} s, {timings[2] * K:.1f} s)", per * K, ">= 100x, identical ranking",
-                 per * K / fast >= 100 and same_rank and same_inf and gap < 1e-9, agree, first - fast),
+    spread = (f"ratio median {np.median(ratios):.0f}x of {len(rounds)} alternating rounds, range "
+              f"{ratios.min():.0f}x-{ratios.max():.0f}x (the round with the median ratio shown)")
+    rows = [_row(case + f" (compiled stencil, jax); {spread}", fast, "imitation-style mce_partition_fh: dense S @ V + "
+                 f"scipy logsumexp, one candidate at a time (BLAS threads {threads}, the faster of 1 and 2 in the first "
+                 f"round: {timings[1] * K:.1f} s, {timings[2] * K:.1f} s)", per * K, ">= 100x on the median round, identical ranking",
+                 bool(np.median(ratios) >= 100 and same_rank and same_inf and gap < 1e-9), agree, first - fast),
             _row(case + " (numpy engine, sparse products)", numpy_engine, "the same imitation-style baseline", per * K,
                  agree=agree)]
     small = gridworld(5, 5, (0, 0), (4, 0), slip=0.1, horizon=6)

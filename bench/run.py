@@ -7,10 +7,15 @@ Each module defines ``run(quick=False) -> list[dict]`` with rows
 practitioner would use, ``compile_seconds`` the one-off compile time (excluded from ``seconds``),
 ``agree`` whether both give the same result and how that was checked.
 
-Usage: ``python bench/run.py [--quick] [--out PATH] [NAME ...]`` (NAME filters the modules).
+Usage: ``python bench/run.py [--quick] [--peers] [--out PATH] [NAME ...]`` (NAME filters the modules).
 Only a full run of every module writes the committed ``figures/benchmarks.md``; a quick or filtered
 run writes ``build/bench/benchmarks-quick.md`` / ``benchmarks-partial.md``. A module that fails is
 reported in the table and makes the exit status non-zero; the others still run.
+
+``--peers`` (``make bench-peers``, in its own environment) runs ``bench/peers/bench_*.py`` instead:
+our solvers against crocoddyl, CasADi + IPOPT and pingouin. Its table is a section of the same
+file, between ``<!-- peers: begin -->`` and ``<!-- peers: end -->``; each run replaces only its own
+part of the file, so ``make bench`` keeps the peers' section and ``make bench-peers`` the rest.
 """
 
 import argparse
@@ -19,6 +24,7 @@ import importlib.metadata
 import importlib.util
 import os
 import platform
+import re
 import subprocess
 import sys
 import time
@@ -37,6 +43,9 @@ COLUMNS = ["benchmark", "case", "seconds", "baseline", "baseline_seconds", "rati
 SHOWN = {"case": "case (problem, size)", "baseline_seconds": "baseline seconds", "compile_seconds": "compile seconds",
          "agree": "agreement (how checked)"}
 VERSIONS = ["numpy", "scipy", "jax", "jaxlib", "optax", "pandas", "cvxpy", "hj-reachability", "statsmodels"]
+PEER_VERSIONS = ["crocoddyl", "casadi", "pingouin"]
+PEERS = "peers"  # the name of the peers' section of the file
+SECTION = re.compile(r"<!-- (?P<name>[\w-]+): begin -->\n.*?<!-- (?P=name): end -->\n?", re.S)
 BUDGET = {True: 180, False: 1200}  # seconds: quick mode, full run (2 cores)
 
 
@@ -55,9 +64,9 @@ def machine():
             "XLA_FLAGS": os.environ.get("XLA_FLAGS", "") or "none (importing mutual sets one: mutual.xla_cpu)"}
 
 
-def versions():
+def versions(names=VERSIONS):
     found = {"python": platform.python_version()}
-    for name in VERSIONS:
+    for name in names:
         try:
             found[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:
@@ -126,20 +135,23 @@ def gaps(table):
     return out
 
 
-def render(table, walls, failed, quick, names, started, total, host):
+def render(table, walls, failed, quick, names, started, total, host, peers=False):
     shown = table.copy()
     shown["met"] = shown["met"].map({True: "yes", False: "NO"}).fillna("")
     shown["compile_seconds"] = shown["compile_seconds"].astype(object).where(shown["compile_seconds"].notna(), "-")
     shown = shown.astype(object).where(shown.notna(), "").rename(columns=SHOWN)
     mode = "quick (small sizes)" if quick else "full"
-    lines = ["# Benchmarks", "",
-             f"Measured by `make bench{' QUICK=1' if quick else ''}` ({mode}{', modules: ' + ', '.join(names) if names else ''})"
-             f" on {started:%Y-%m-%d %H:%M} UTC at commit `{_commit()}`, in {total:.0f} s.",
+    target, h = ("bench-peers", "###") if peers else ("bench", "##")
+    lines = ["## Against the peers (`make bench-peers`)" if peers else "# Benchmarks", "",
+             f"Measured by `make {target}{' QUICK=1' if quick else ''}` ({mode}"
+             f"{', modules: ' + ', '.join(names) if names else ''}) on {started:%Y-%m-%d %H:%M} UTC at commit "
+             f"`{_commit()}`, in {total:.0f} s{PEERS_ENVIRONMENT if peers else ''}.",
              "`ratio` = baseline seconds / seconds (higher is faster); `compile seconds` is the one-off compile time,",
-             "excluded from `seconds`; `-` where the row reports none.", "", "## Machine", ""]
+             "excluded from `seconds`; `-` where the row reports none.", "", f"{h} Machine", ""]
     lines += [f"- {k}: {v}" for k, v in host.items()]
-    lines += ["", "## Versions", "", "- " + ", ".join(f"{k} {v}" for k, v in versions().items()), "",
-              "## Timings", "", markdown_table(shown, floatfmt=".3g").rstrip(), "",
+    lines += ["", f"{h} Versions", "",
+              "- " + ", ".join(f"{k} {v}" for k, v in versions(VERSIONS + PEER_VERSIONS * peers).items()), "",
+              f"{h} Timings", "", markdown_table(shown, floatfmt=".3g").rstrip(), "",
               "Wall time per module: " + ", ".join(f"{k} {v:.0f} s" for k, v in walls.items()) + "."]
     notes = gaps(table)
     if notes:
@@ -151,27 +163,51 @@ def render(table, walls, failed, quick, names, started, total, host):
     return "\n".join(lines) + "\n"
 
 
-def default_output(quick, names):
+PEERS_ENVIRONMENT = (", in the peers' environment (`.venv-peers`, from `bench/peers/requirements.lock`; the "
+                     "packages it shares with `environment.lock` at the same versions)")
+
+
+def default_output(quick, names, peers=False):
     """Only a full run of every module writes the committed table."""
+    prefix = "peers" if peers else "benchmarks"
     if quick:
-        return BUILD / "bench" / "benchmarks-quick.md"
-    return BUILD / "bench" / "benchmarks-partial.md" if names else FIGURES / "benchmarks.md"
+        return BUILD / "bench" / f"{prefix}-quick.md"
+    return BUILD / "bench" / f"{prefix}-partial.md" if names else FIGURES / "benchmarks.md"
+
+
+def merge(old, new, section=None):
+    """The text of the benchmarks file after a run: ``new`` replaces the main part (``section``
+    None) or the named section of ``old``, and every other part of ``old`` is kept. Sections sit
+    after the main part, each between ``<!-- NAME: begin -->`` and ``<!-- NAME: end -->``."""
+    sections = {m["name"]: m[0].rstrip() + "\n" for m in SECTION.finditer(old)}
+    main = SECTION.sub("", old).rstrip()
+    if section is None:
+        main = new.rstrip()
+    else:
+        sections[section] = f"<!-- {section}: begin -->\n{new.rstrip()}\n<!-- {section}: end -->\n"
+    parts = [main + "\n"] if main else []
+    return "\n".join(parts + list(sections.values()))
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description="Run the compendium's benchmarks.")
     parser.add_argument("--quick", action="store_true", help="small sizes (under 3 minutes); never writes figures/")
+    parser.add_argument("--peers", action="store_true",
+                        help="the peers (bench/peers/: crocoddyl, CasADi, pingouin), in their own environment")
     parser.add_argument("--out", type=Path, help="where to write the table (default: see the module docstring)")
     parser.add_argument("--modules", type=Path, default=BENCH, help=argparse.SUPPRESS)
     parser.add_argument("names", nargs="*", help="only modules whose name contains one of these")
     args = parser.parse_args(argv)
     host = machine()  # before the run: the load average at its start
     started, start = datetime.datetime.now(datetime.timezone.utc), time.perf_counter()
-    table, walls, failed = collect(args.quick, args.names, args.modules)
-    text = render(table, walls, failed, args.quick, args.names, started, time.perf_counter() - start, host)
+    folder = BENCH / PEERS if args.peers and args.modules == BENCH else args.modules
+    table, walls, failed = collect(args.quick, args.names, folder)
+    text = render(table, walls, failed, args.quick, args.names, started, time.perf_counter() - start, host,
+                  args.peers)
     print(text)
-    out = args.out or default_output(args.quick, args.names)
-    print(f"wrote {write_text(out, text)}")
+    out = args.out or default_output(args.quick, args.names, args.peers)
+    old = out.read_text() if out.exists() else ""
+    print(f"wrote {write_text(out, merge(old, text, PEERS if args.peers else None))}")
     if failed:
         print(f"benchmarks failed: {', '.join(failed)}", file=sys.stderr)
         return 1

@@ -71,3 +71,38 @@ def test_names_filter_the_modules(tmp_path, names, expected):
                                              "'case': 'c', 'seconds': 1.0}]\n")
     _, walls, _ = bench.collect(True, names, tmp_path)
     assert list(walls) == expected
+
+
+def test_bench_and_bench_peers_each_replace_only_their_own_part_of_the_file():
+    main_v1, main_v2 = "# Benchmarks\n\nold table\n", "# Benchmarks\n\nnew table\n"
+    peers_v1, peers_v2 = "## Against the peers\n\nFDDP 1 ms\n", "## Against the peers\n\nFDDP 2 ms\n"
+    text = bench.merge("", peers_v1, bench.PEERS)  # peers first, into no file
+    assert text == "<!-- peers: begin -->\n" + peers_v1 + "<!-- peers: end -->\n"
+    text = bench.merge(text, main_v1)  # then the main bench: the peers' section stays after it
+    assert text.startswith(main_v1) and text.count("FDDP 1 ms") == 1
+    text = bench.merge(text, peers_v2, bench.PEERS)  # the peers again: the main part stays
+    assert "old table" in text and "FDDP 2 ms" in text and "FDDP 1 ms" not in text
+    text = bench.merge(text, main_v2)
+    assert "new table" in text and "old table" not in text and "FDDP 2 ms" in text
+    assert text == main_v2 + "\n<!-- peers: begin -->\n" + peers_v2 + "<!-- peers: end -->\n"
+    assert bench.merge(text, main_v2) == text  # a rerun changes nothing
+
+
+def test_a_peers_run_writes_its_section_beside_the_main_table(tmp_path):
+    modules = tmp_path / "bench"
+    modules.mkdir()
+    (modules / "bench_a_good.py").write_text(textwrap.dedent(GOOD))
+    out = tmp_path / "benchmarks.md"
+    out.write_text("# Benchmarks\n\nthe main table\n")
+    assert bench.main(["--quick", "--peers", "--modules", str(modules), "--out", str(out)]) == 0
+    text = out.read_text()
+    assert text.startswith("# Benchmarks\n\nthe main table\n")
+    for phrase in ("<!-- peers: begin -->\n## Against the peers (`make bench-peers`)", "### Machine", "### Timings",
+                   "make bench-peers QUICK=1", "crocoddyl ", "casadi ", "pingouin ", "<!-- peers: end -->"):
+        assert phrase in text, f"{phrase!r} missing from:\n{text}"
+    assert bench.main(["--quick", "--modules", str(modules), "--out", str(out)]) == 0  # the main bench after it
+    text = out.read_text()
+    assert "the main table" not in text and text.count("<!-- peers: begin -->") == 1
+    assert text.index("# Benchmarks") < text.index("<!-- peers: begin -->")
+    assert bench.default_output(True, [], peers=True).is_relative_to(BUILD)
+    assert bench.default_output(False, [], peers=True) == FIGURES / "benchmarks.md"

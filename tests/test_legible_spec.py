@@ -132,15 +132,15 @@ def test_receding_horizon_raises_alpha_over_the_horizon():
 
 
 def test_dubins_legible_is_a_stationary_point_and_exaggerates():
-    from mutual.motion import spec as module
+    from mutual.motion import spec_dubins as module
     from mutual.motion.trajopt import trajectory_cost_grad
     spec = legible_spec({"dynamics": "dubins", "start": [0.0, 0.0, np.pi / 2], "goal": [1.5, 2.5],
                          "distractors": [[-1.5, 2.5]], "horizon": 1.0, "steps": 30, "alpha": 1.0,
                          "terminal_weight": 10.0, "effort_weight": 0.1})
     out = solve_legible(spec)
     xs, us = out["legible"]
-    params = module._dubins_params(spec, 2 * 10.0, 10.0, 1.0 * 0.1)
-    value, grad = trajectory_cost_grad(module._dubins_step, module._dubins_running, module._dubins_terminal,
+    params = module.params(spec, 2 * 10.0, 10.0, 1.0 * 0.1)
+    value, grad = trajectory_cost_grad(module.step, module.running, module.terminal,
                                        np.array(spec.start), us, params)
     assert np.abs(grad).max() <= 1e-6 * (1 + abs(value))
     # the legible end point lies farther right, away from the distractor, than the predictable one

@@ -1,6 +1,6 @@
 """Regenerate the SIMULATED example inputs of data/examples/ (documented in data/README.md).
 
-    .venv/bin/python data/examples/regenerate.py [demonstrations|interventions|study]
+    .venv/bin/python data/examples/regenerate.py [demonstrations|interventions|study|trajectories]
 
 Fixed seeds: a second run writes the same files (up to the library's numerics). The examples are
 simulated from the thesis's own generative models; they show the formats and let every command
@@ -51,11 +51,28 @@ def interventions():
     write_interventions(pd.concat(rows, ignore_index=True), HERE / "interventions.csv")
 
 
+def trajectories():
+    """Continuous demonstrations (issue 21): 20 swing-ups of the pendulum of pendulum.toml by its
+    [simulate] demonstrator under the hidden limit theta_dot <= 5 rad/s, with the torques recorded; and
+    20 drives of the car of unicycle.toml past the hidden disk, without controls (inference infers them)."""
+    from mutual.constraints.continuous import demonstrators as dm
+    from mutual.constraints.continuous import load_system, write_recording
+    for name, controls in (("pendulum", True), ("unicycle", False)):
+        spec = load_system(HERE / f"{name}.toml")
+        problem, sim = spec.problem, spec.simulate
+        starts = dm.starts_around(sim["start"], sim["spread"], sim["n"], sim["seed"])
+        demonstrator = dm.soft_demonstrator(problem, sim["hidden"], sim["fine_cells"], scheduler="inline")
+        recording = dm.rollout(demonstrator, starts, sim["seed"] + 1)
+        write_recording(HERE / f"{name}_trajectories.csv", recording, problem.system.state_names,
+                        problem.system.control_names if controls else None)
+
+
 def study():
     """The compendium's simulated Phase III table (data/ch5_simulated_phase3.csv), copied."""
     shutil.copyfile(HERE.parent / "ch5_simulated_phase3.csv", HERE / "study.csv")
 
 
 if __name__ == "__main__":
-    for name in sys.argv[1:] or ["demonstrations", "interventions", "study"]:
-        {"demonstrations": demonstrations, "interventions": interventions, "study": study}[name]()
+    for name in sys.argv[1:] or ["demonstrations", "interventions", "study", "trajectories"]:
+        {"demonstrations": demonstrations, "interventions": interventions, "study": study,
+         "trajectories": trajectories}[name]()

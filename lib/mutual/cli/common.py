@@ -1,6 +1,7 @@
 """What every ``mutual`` command shares: the output options (``--out``, ``--json``,
-``--no-progress``), atomic output files, one-line error reports with exit status 2 for bad
-input, and progress bars on stderr.
+``--no-progress``), CSV input read as the user wrote it (:func:`read_csv`), outputs written as a
+set (:func:`output_set`: all of a run's files or none), one-line error reports with exit status 2
+for bad input, and progress bars on stderr.
 
 Only the standard library is imported at module level, so that ``mutual --help`` stays fast;
 numpy, pandas and matplotlib are imported inside the functions that need them.
@@ -20,12 +21,16 @@ class InputError(Exception):
     """Bad input (a file, a column, an option): reported as one line, exit status 2."""
 
 
+class OutputError(Exception):
+    """The outputs could not be written (a full disk, say); nothing was left in --out: one line, exit status 1."""
+
+
 def add_output_options(parser):
     """``--out DIR``, ``--json`` and ``--no-progress`` on a command's parser."""
     group = parser.add_argument_group("output")
     group.add_argument("--out", metavar="DIR", type=Path, default=Path("."),
                        help="folder for the output files, created if missing (default: the current directory); "
-                            "each file is written atomically, so an interrupted run leaves no half-written file")
+                            "the files are written as a set, so a failed or interrupted run leaves none of them")
     group.add_argument("--json", action="store_true",
                        help="print the results as one JSON object on stdout instead of the readable summary")
     group.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
@@ -62,10 +67,12 @@ def about(path):
 
 
 def read_csv(path):
-    """``pandas.read_csv`` with the errors of :func:`about` (file named, one line)."""
-    import pandas as pd
+    """The CSV table at ``path`` with every cell as text as written (:func:`mutual.csvfile.read_text_csv`:
+    ``01``, ``1``, ``NA`` and ``None`` are distinct names; only empty cells are missing; a duplicated
+    column name or another delimiter is refused), with the errors of :func:`about` (file named, one line)."""
+    from ..csvfile import read_text_csv
     with about(path):
-        frame = pd.read_csv(path, dtype={"participant": str})
+        frame = read_text_csv(path)
     if frame.empty:
         raise InputError(f"{path}: no data rows after the header")
     return frame
@@ -111,29 +118,121 @@ def integer_column(frame, column, path, allow_empty=False):
 
 
 def output_path(args, name):
-    """``args.out / name``, refusing an ``--out`` that is a file."""
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: exists and is not a folder")
-    return out / name
+    """``args.out / name``, refusing an ``--out`` that is a file (one file at a time: prefer :func:`output_set`)."""
+    check_out(args)
+    return Path(args.out) / name
 
 
 def write_csv(frame, path, **to_csv):
-    """Write a DataFrame atomically."""
+    """Write a DataFrame atomically, numbers exactly unless ``float_format`` says otherwise (one file at a
+    time: prefer :func:`output_set`)."""
     from ..atomic import atomic_path
+    from ..csvfile import format_exact
     with atomic_path(path) as tmp:
-        frame.to_csv(tmp, index=False, **to_csv)
+        frame.to_csv(tmp, index=False, **{"float_format": format_exact, **to_csv})
     return Path(path)
 
 
 def save_figure(fig, path):
-    """Save a matplotlib figure atomically (PNG, 150 dpi) and close it."""
+    """Save a matplotlib figure atomically (PNG, 150 dpi) and close it (one file at a time: prefer :func:`output_set`)."""
     import matplotlib.pyplot as plt
     from ..atomic import atomic_path
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=150, bbox_inches="tight", metadata={"Software": None})
     plt.close(fig)
     return Path(path)
+
+
+def check_out(args):
+    """Refuse an ``--out`` that exists and is not a folder (before any work is done)."""
+    out = getattr(args, "out", None)
+    if out is not None and Path(out).exists() and not Path(out).is_dir():
+        raise InputError(f"--out {out}: exists and is not a folder")
+
+
+class OutputSet:
+    """The files of one run, written into a temporary folder (see :func:`output_set`)."""
+
+    def __init__(self, out, staging):
+        self.out, self.staging, self.names = Path(out), Path(staging), []
+
+    def path(self, name):
+        """Where to write the output ``name`` now; returns the staging path (the file lands in --out on success)."""
+        if Path(name).name != name or name.startswith("."):
+            raise ValueError(f"an output name must be a plain file name, got {name!r}")
+        if name in self.names:
+            raise ValueError(f"output {name!r} written twice")
+        self.names.append(name)
+        return self.staging / name
+
+    def final(self, name):
+        return self.out / name
+
+    def csv(self, frame, name):
+        """Write a DataFrame; numbers read back exactly (:func:`mutual.csvfile.format_exact`). Returns its final path."""
+        from ..csvfile import format_exact
+        frame.to_csv(self.path(name), index=False, float_format=format_exact)
+        return self.final(name)
+
+    def figure(self, fig, name):
+        """Save a matplotlib figure (PNG, 150 dpi, no timestamp) and close it. Returns its final path."""
+        import matplotlib.pyplot as plt
+        try:
+            fig.savefig(self.path(name), dpi=150, bbox_inches="tight", metadata={"Software": None})
+        finally:
+            plt.close(fig)
+        return self.final(name)
+
+
+@contextmanager
+def output_set(args):
+    """Write a command's outputs as a set: ``with output_set(args) as files: files.csv(table, "a.csv"); ...``.
+
+    The files go into a hidden temporary folder -- next to ``--out`` when it does not exist yet (then
+    renamed to it), else inside it (then each file is renamed into ``--out``) -- so a run that fails
+    while writing (a full disk, an error in a figure, Ctrl-C) leaves none of its outputs, and a run that
+    succeeds leaves all of them. A write that fails raises :class:`OutputError` naming ``--out``.
+    """
+    import shutil
+    import tempfile
+    out = Path(args.out)
+    check_out(args)
+    fresh = not out.exists()
+    try:
+        (out.parent if fresh else out).mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name or 'out'}.partial-", dir=out.parent if fresh else out))
+    except OSError as err:
+        raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
+    files = OutputSet(out, staging)
+    try:
+        try:
+            yield files
+        except OSError as err:
+            raise OutputError(f"--out {out}: could not write {Path(err.filename or '').name or 'the outputs'} "
+                              f"({err.strerror or err}); no output was left") from None
+        _commit(files, fresh)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def _commit(files, fresh):
+    """Move the staged files into --out: one rename of the folder, or one rename per file."""
+    out, staging = files.out, files.staging
+    if fresh:
+        try:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(staging, 0o777 & ~umask)        # a folder as mkdir makes it, not mkdtemp's 0700
+            os.rename(staging, out)
+            return
+        except OSError:
+            out.mkdir(parents=True, exist_ok=True)   # --out appeared meanwhile: move file by file
+    clash = [n for n in files.names if (out / n).is_dir()]
+    if clash:
+        raise OutputError(f"--out {out}: {clash[0]!r} is a folder there; no output was written")
+    for name in files.names:
+        os.chmod(staging / name, 0o644)
+        os.replace(staging / name, out / name)
 
 
 def use_agg():
@@ -184,15 +283,21 @@ def run(args, prog):
     Set ``MUTUAL_DEBUG=1`` to see the traceback of an unexpected error.
     """
     try:
+        check_out(args)
         args.handler(args)
         return EXIT_OK
     except InputError as err:
         return _fail(prog, str(err), EXIT_BAD_INPUT)
+    except OutputError as err:
+        return _fail(prog, str(err), EXIT_FAILED)
     except (FileNotFoundError, IsADirectoryError, PermissionError) as err:
         where = f"{err.filename}: " if err.filename else ""
         return _fail(prog, f"{where}{err.strerror or err}", EXIT_BAD_INPUT)
     except KeyboardInterrupt:
         return _fail(prog, "interrupted", EXIT_INTERRUPTED)
+    except BrokenPipeError:           # the reader of stdout left (| head): the outputs are written; say nothing
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
     except Exception as err:  # an unexpected failure: one line unless asked for the traceback
         if os.environ.get("MUTUAL_DEBUG"):
             raise
@@ -209,7 +314,13 @@ def _shown(value):
     """A cell's value as the user wrote it: numbers plainly, text quoted."""
     if hasattr(value, "item"):
         value = value.item()
-    return repr(value) if isinstance(value, str) else f"{value:g}" if isinstance(value, float) else str(value)
+    if isinstance(value, str):
+        try:
+            float(value)
+            return value.strip() if value.strip() == value else repr(value)   # a number, as written
+        except ValueError:
+            return repr(value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _first_line(err):

@@ -7,7 +7,7 @@ its maximum-likelihood threshold psi* (eq. 3.3) and one constraint per action
 (Algorithm 4, eq. 2.25; :func:`mutual.constraints.greedy_inference`), until the stop rule fires.
 """
 
-from . import common
+from . import common, continuous
 
 DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 10, 0.1, 5
 
@@ -63,6 +63,7 @@ def register(subparsers):
                        help=f"candidates to print per round (default {DEFAULT_TOP}; the CSV has all)")
     common.add_output_options(infer)
     infer.set_defaults(handler=run_infer, prog=infer.prog)
+    continuous.register(commands)      # infer-continuous and simulate (issue 21)
     return parser
 
 
@@ -129,7 +130,8 @@ def run_infer(args):
     for column in ("demo", "t", "state"):
         common.integer_column(frame, column, demos_path)
     common.integer_column(frame, "action", demos_path, allow_empty=True)
-    last = frame["t"] == frame.groupby("demo")["t"].transform("max")
+    t = frame["t"].astype(float)          # read as text: compare the numbers, not the strings
+    last = t == t.groupby(frame["demo"].astype(float)).transform("max")
     gap = frame["action"].isna() & ~last
     if gap.any():
         row = int(gap.to_numpy().argmax())
@@ -152,11 +154,10 @@ def run_infer(args):
             stopped = "no candidate left"
     table = ranking_table(grid, cand, rounds, result.chosen)
     chosen = table[table["chosen"]].drop(columns=["rank", "chosen"])
-    outputs = {
-        "ranking": common.write_csv(table, common.output_path(args, "constraints_ranking.csv"), float_format="%.8g"),
-        "chosen": common.write_csv(chosen, common.output_path(args, "constraints_chosen.csv"), float_format="%.8g"),
-        "figure": common.save_figure(_figure(grid, cand, result), common.output_path(args, "constraints.png")),
-    }
+    with common.output_set(args) as files:
+        outputs = {"ranking": files.csv(table, "constraints_ranking.csv"),
+                   "chosen": files.csv(chosen, "constraints_chosen.csv"),
+                   "figure": files.figure(_figure(grid, cand, result), "constraints.png")}
     results = {
         "command": "constraints infer", "input": str(demos_path), "world": str(world_path),
         "n_demonstrations": demos.n, "steps": demos.steps, "n_states": mdp.n_states, "n_actions": mdp.n_actions,

@@ -1,22 +1,24 @@
-"""``mutual study power``: plan a replication of the chapter 5 study (issue 16).
+"""``mutual study power``: plan a replication of the chapter 5 study (issue 16), in G*Power's words (issue 22).
 
-Analytic power from the thesis's reported F (G*Power's repeated-measures convention) and the
-SIMULATED power of the omnibus test and the Learned-vs-Standard contrast from whole simulated
-cohorts, on Dask: an embedded LocalCluster by default, ``--scheduler ADDRESS`` (or
-``$MUTUAL_DASK_SCHEDULER``) for a running cluster, ``--inline`` for no Dask at all::
+Three answers, in :func:`run_power`:
 
-    mutual study power --n 6:40:2 11 --cohorts 60
-    mutual study power --quick --n 6 8 --cohorts 4 --json
-    mutual study power --scheduler tcp://10.0.0.5:8786 --cohorts 1000
-    mutual study power --analytic-only --from-f 8.72 2 20
+* ``--f F`` (with ``--m``, ``--rho``, ``--eps``, ``--alpha``, ``--power``, ``--n``): G*Power's "ANOVA:
+  repeated measures, within factors" for one group: the power at each ``--n`` and the N reaching
+  each ``--power`` (:func:`mutual.study.power.gpower_table`);
+* ``--from-f F DF1 DF2`` (default: the thesis's ``F(2, 20) = 8.72``): the effect a reported F implies,
+  with its bias corrected and its interval, and the N for each target (:func:`mutual.study.power.replication_plan`);
+* unless ``--analytic-only`` (or ``--f``): the SIMULATED power of the omnibus test and the
+  Learned-vs-Standard contrast from whole simulated cohorts, on Dask (an embedded LocalCluster by
+  default, ``--scheduler ADDRESS`` or ``$MUTUAL_DASK_SCHEDULER`` for a running cluster, ``--inline``
+  for no Dask at all).
 
 Wiring: ``register(study_subparsers)`` adds the ``power`` command to the ``study`` group of the
 ``mutual`` command line (``EXTENSIONS = ("power",)`` in :mod:`.study`); ``main(argv)`` runs it alone
-(``python -m mutual.cli.power``). Outputs to ``--out``: ``power_plan.csv`` (analytic) and, with the
-simulation, ``power_simulated.csv``, ``power_recommended.csv`` and ``power_curves.png``.
+(``python -m mutual.cli.power``).
 """
 
 import argparse
+import math
 import sys
 
 from . import common
@@ -24,86 +26,241 @@ from . import common
 PROG = "mutual study power"
 #: the keys of mutual.study.cohort_power.MIXES (spelled out: building the parser imports no numpy; a test checks)
 MIX_NAMES = ("thesis", "mostly-standard", "mostly-gradual")
+#: what one request may ask for: sample sizes listed, the largest N (analytic, simulated), cohorts
+MAX_SIZES, MAX_N_ANALYTIC, MAX_N_SIMULATED, MAX_COHORTS = 10_000, 100_000, 1_000, 100_000
+#: measured (README, "Planning a replication"): one simulated participant on the full grid with 60-s trials
+SECONDS_PER_PARTICIPANT = 0.32
+
+DESCRIPTION = """\
+Power and sample size of a one-way repeated-measures study, analytic (G*Power's "ANOVA: repeated
+measures, within factors") and SIMULATED (whole cohorts of chapter 4's noisy supervisors run through
+the chapter 5 study, on Dask).
+
+  --f F [--m M --rho R --eps E --alpha A --power P --n N]   G*Power: power at N, and the N for power P
+  --from-f F DF1 DF2                                        the effect a reported F implies, and the N
+                                                            to replicate it (default: the thesis's 8.72 2 20)
+  (without --analytic-only or --f)                          also the SIMULATED power at --n
+
+Measured (figures/benchmarks.md, a shared 2.3 GHz 2-core machine): --f and --analytic-only 1.8-2.4 s
+of CPU, nearly all of it importing scipy.stats and pandas, no JAX; the simulation about 3.5 s per cohort
+of 11 participants per core plus 8-16 s to start a LocalCluster, and about 12 s wall (mostly imports and
+loading the value functions; 4.9 s of CPU) once its cohorts are cached.
+
+writes to --out:  power_gpower.csv (with --f) or power_plan.csv (--from-f); with the simulation also
+                  power_simulated.csv, power_recommended.csv and power_curves.png
+"""
 
 EXAMPLE = """\
 examples:
+  mutual study power --f 0.25 --m 3 --rho 0.5 --power 0.95   # G*Power's a priori analysis: N = 43
+  mutual study power --f 0.25 --m 3 --n 10 20 30 --eps 0.8   # power at given N, sphericity violated
   mutual study power --analytic-only                         # the plan from the thesis's F(2, 20) = 8.72
   mutual study power --n 6:40:2 11 --cohorts 60              # SIMULATED cohorts on a LocalCluster
   mutual study power --quick --n 6 8 --cohorts 4 --json      # a smoke test
   MUTUAL_DASK_SCHEDULER=tcp://host:8786 mutual study power --cohorts 1000   # on a running Dask cluster
 """
 
+SIMULATION_OPTIONS = ("cohorts", "mix", "noise", "quick", "seed", "scheduler", "workers", "inline", "no_cache")
 
-def parse_sizes(tokens):
-    """Sample sizes from tokens ``"6:40:2"`` (inclusive range, step optional), ``"11"`` or ``"6,8,11"``."""
-    sizes = set()
+
+def _range_size(a, b, step):
+    return (b - a) // step + 1 if a <= b else 0
+
+
+def parse_sizes(tokens, most=MAX_N_ANALYTIC, why="an analytic N"):
+    """Sample sizes from tokens ``"6:40:2"`` (inclusive range, step optional), ``"11"`` or ``"6,8,11"``.
+
+    The request is sized before anything is listed: more than ``MAX_SIZES`` sizes, or an N above
+    ``most``, is refused with what it would cost."""
+    ranges = []
     for token in tokens:
         for part in str(token).split(","):
             bits = part.strip().split(":")
             try:
                 nums = [int(b) for b in bits]
             except ValueError:
-                raise ValueError(f"--n: {part!r} is not an integer or a range a:b[:step]") from None
+                raise ValueError(f"--n: {part!r} is not a whole number or a range a:b[:step]") from None
             if len(nums) == 1:
-                sizes.add(nums[0])
-            elif len(nums) in (2, 3) and (len(nums) == 2 or nums[2] > 0) and nums[0] <= nums[1]:
-                sizes.update(range(nums[0], nums[1] + 1, nums[2] if len(nums) == 3 else 1))
-            else:
+                nums = [nums[0], nums[0], 1]
+            elif len(nums) == 2:
+                nums.append(1)
+            if len(nums) != 3 or nums[2] <= 0 or nums[0] > nums[1]:
                 raise ValueError(f"--n: {part!r} is not a range a:b[:step] with a <= b and step > 0")
-    if not sizes or min(sizes) < 3:
-        raise ValueError(f"--n: sample sizes must be integers >= 3, got {sorted(sizes)}")
-    return sorted(sizes)
+            ranges.append((part.strip(), *nums))
+    if not ranges:
+        raise ValueError("--n: give at least one sample size")
+    count = sum(_range_size(a, b, step) for _, a, b, step in ranges)
+    top = max(b - (b - a) % step for _, a, b, step in ranges)
+    if count > MAX_SIZES:
+        raise ValueError(f"--n {' '.join(map(str, tokens))}: {count:,} sample sizes (at most {MAX_SIZES:,}); listing "
+                         f"them would take about {_bytes(count * 64)} before any work")
+    low = min(a for _, a, _, _ in ranges)
+    if low < 3:
+        raise ValueError(f"--n: sample sizes must be whole numbers >= 3, got {low}")
+    if top > most:
+        raise ValueError(f"--n: N = {top:,} is more than {most:,} for {why}" + _cost(top))
+    return sorted({n for _, a, b, step in ranges for n in range(a, b + 1, step)})
+
+
+def _bytes(n):
+    for unit in ("bytes", "kB", "MB", "GB", "TB", "PB"):
+        if n < 1000 or unit == "PB":
+            return f"{n:.3g} {unit}"
+        n /= 1000
+
+
+def _duration(seconds):
+    for unit, size in (("years", 3.15e7), ("days", 86400), ("hours", 3600), ("minutes", 60)):
+        if seconds >= size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
+
+
+def _cost(n, cohorts=1):
+    return (f" (simulating {cohorts:,} cohort{'s' if cohorts != 1 else ''} of {n:,} analysed participants would take "
+            f"about {_duration(cohorts * n * SECONDS_PER_PARTICIPANT)} of CPU time at {SECONDS_PER_PARTICIPANT} s per "
+            f"participant and about {_bytes(cohorts * n * 2 * 400)} for their tables)")
+
+
+def _whole(least, option):
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if value < least:
+            raise argparse.ArgumentTypeError(f"{option} must be a whole number >= {least}, got {value}")
+        return value
+    return parse
+
+
+def _real(option, low=-math.inf, high=math.inf, low_open=False, high_open=False):
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        below = value <= low if low_open else value < low
+        above = value >= high if high_open else value > high
+        if not math.isfinite(value) or below or above:
+            lo, hi = ("(" if low_open else "[") + f"{low:g}", f"{high:g}" + (")" if high_open else "]")
+            raise argparse.ArgumentTypeError(f"{option} must be a finite number in {lo}, {hi}, got {text}")
+        return value
+    return parse
 
 
 def add_arguments(parser):
+    ana = parser.add_argument_group("analytic (G*Power: ANOVA, repeated measures, within factors)")
+    ana.add_argument("--f", type=_real("--f", 0), metavar="F",
+                     help="G*Power's effect size f (sd of the level means / sd of one measurement); selects the "
+                          "G*Power analysis (analytic only)")
+    ana.add_argument("--m", type=_whole(2, "--m"), default=None, metavar="M",
+                     help="number of measurements (levels) per subject (default 3, the thesis's three safe sets)")
+    ana.add_argument("--rho", type=_real("--rho", -1, 1, high_open=True), default=None, metavar="R",
+                     help="correlation among the repeated measures, at least -1/(m-1) (default 0.5, as G*Power)")
+    ana.add_argument("--eps", type=_real("--eps", 0, 1, low_open=True), default=1.0, metavar="E",
+                     help="nonsphericity correction epsilon in [1/(m-1), 1] (default 1: sphericity)")
+    ana.add_argument("--alpha", type=_real("--alpha", 0, 1, True, True), default=0.05,
+                     help="significance level (default 0.05)")
+    ana.add_argument("--power", type=_real("--power", 0, 1, True, True), nargs="+", default=[0.8, 0.9],
+                     metavar="P", help="target power(s) for the sample size (default: 0.8 0.9)")
+    ana.add_argument("--from-f", nargs=3, type=_real("--from-f", 0), default=None, metavar=("F", "DF1", "DF2"),
+                     help="a reported one-way RM F and its degrees of freedom (default: the thesis's 8.72 2 20)")
+    ana.add_argument("--analytic-only", action="store_true", help="no simulation")
     sim = parser.add_argument_group("simulation (SIMULATED cohorts with the chapter 5 model)")
-    sim.add_argument("--n", nargs="+", default=["6:40:2", "11"], metavar="N",
-                     help="analysed sample sizes: integers or ranges a:b[:step] (default: 6:40:2 11)")
-    sim.add_argument("--cohorts", type=int, default=60, help="simulated cohorts per sample size (default 60)")
-    sim.add_argument("--mix", choices=MIX_NAMES, default="thesis", help="mix of supervisor types (default: thesis)")
-    sim.add_argument("--noise", type=float, default=1.0, help="multiplier of the supervisors' judgement noise")
-    sim.add_argument("--quick", action="store_true", help="quick grid, 15 scenes, 20-s trials (a smoke test)")
-    sim.add_argument("--seed", type=int, default=0, help="root seed of the sweep (default 0)")
-    sim.add_argument("--alpha", type=float, default=0.05, help="significance level (default 0.05)")
-    dask = parser.add_argument_group("where it runs")
+    sim.add_argument("--n", nargs="+", default=None, metavar="N",
+                     help="sample sizes: whole numbers or ranges a:b[:step] (simulation default: 6:40:2 11; "
+                          "with --f: the power at each)")
+    sim.add_argument("--cohorts", type=_whole(1, "--cohorts"), help="simulated cohorts per sample size (default 60)")
+    sim.add_argument("--mix", choices=MIX_NAMES, help="mix of supervisor types (default: thesis)")
+    sim.add_argument("--noise", type=_real("--noise", 0, low_open=True),
+                     help="multiplier of the supervisors' judgement noise (default 1)")
+    sim.add_argument("--quick", action="store_true", default=None,
+                     help="quick grid, 15 scenes, 20-s trials (a smoke test)")
+    sim.add_argument("--seed", type=_whole(0, "--seed"), help="root seed of the sweep (default 0)")
+    dask = parser.add_argument_group("where the simulation runs")
     dask.add_argument("--scheduler", metavar="ADDRESS",
                       help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: $MUTUAL_DASK_SCHEDULER, "
                            "else an embedded LocalCluster)")
-    dask.add_argument("--workers", type=int, help="workers of the embedded LocalCluster (default: one per core)")
-    dask.add_argument("--inline", action="store_true", help="run in this process, without Dask")
-    dask.add_argument("--no-cache", action="store_true", help="neither read nor write the per-cohort cache")
-    ana = parser.add_argument_group("analytic")
-    ana.add_argument("--analytic-only", action="store_true", help="only the analytic plan from the reported F")
-    ana.add_argument("--from-f", nargs=3, type=float, default=[8.72, 2, 20], metavar=("F", "DF1", "DF2"),
-                     help="the reported one-way RM F and its degrees of freedom (default: the thesis's 8.72 2 20)")
+    dask.add_argument("--workers", type=_whole(1, "--workers"),
+                      help="workers of the embedded LocalCluster (default: one per core)")
+    dask.add_argument("--inline", action="store_true", default=None, help="run in this process, without Dask")
+    dask.add_argument("--no-cache", action="store_true", default=None,
+                      help="neither read nor write the per-cohort cache")
     common.add_output_options(parser)
 
 
 def register(study_subparsers):
     """Add ``power`` to the ``mutual study`` command group."""
-    parser = study_subparsers.add_parser("power", help="plan a replication: analytic and SIMULATED power",
-                                         description=__doc__.split("\n\n")[1], epilog=EXAMPLE,
+    parser = study_subparsers.add_parser("power", help="power and sample size: G*Power's analytic and SIMULATED",
+                                         description=DESCRIPTION, epilog=EXAMPLE,
                                          formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     parser.set_defaults(handler=run_power, prog=parser.prog)
     return parser
 
 
+def _checked(args):
+    """Refuse options that do not go together, and fill in the defaults of the mode chosen."""
+    given = [name for name in SIMULATION_OPTIONS if getattr(args, name) is not None]
+    if args.f is not None:
+        if args.from_f is not None:
+            raise ValueError("--f and --from-f exclude each other: give G*Power's f, or a reported F to plan from")
+        if given:
+            raise ValueError(f"--{given[0].replace('_', '-')} is a simulation option; --f is G*Power's analytic "
+                             "analysis (drop --f to simulate the chapter 5 study)")
+        args.m = 3 if args.m is None else args.m
+        args.rho = 0.5 if args.rho is None else args.rho
+        if args.rho < -1 / (args.m - 1):
+            raise ValueError(f"--rho {args.rho:g}: below -1/(m-1) = {-1 / (args.m - 1):.4g} for --m {args.m}, no "
+                             "covariance matrix has equal correlations")
+    else:
+        if args.rho is not None:
+            raise ValueError("--rho goes with --f: the partial eta squared of a reported F already holds the correlation")
+        args.from_f = args.from_f or [8.72, 2.0, 20.0]
+        F, df1, df2 = args.from_f
+        if not (df1.is_integer() and df2.is_integer() and df1 >= 1 and df2 >= 1):
+            raise ValueError(f"--from-f: degrees of freedom must be whole numbers >= 1, got {df1:g} {df2:g}")
+        if df1 + 1 > MAX_SIZES or df2 / df1 + 1 > MAX_N_ANALYTIC:
+            raise ValueError(f"--from-f: F({df1:g}, {df2:g}) implies {df1 + 1:g} levels and {df2 / df1 + 1:g} subjects; "
+                             f"at most {MAX_SIZES:,} levels and {MAX_N_ANALYTIC:,} subjects")
+        if args.m is not None and args.m != int(df1) + 1:
+            raise ValueError(f"--m {args.m}: F({int(df1)}, {int(df2)}) has {int(df1) + 1} levels")
+        args.m = int(df1) + 1
+    low = [p for p in args.power if p <= args.alpha]
+    if low:
+        raise ValueError(f"--power {low[0]:g}: a target power must exceed --alpha {args.alpha:g} (the power at zero "
+                         "effect)")
+    if args.eps < 1 / (args.m - 1) - 1e-12:
+        raise ValueError(f"--eps {args.eps:g}: epsilon lies in [1/(m-1), 1] = [{1 / (args.m - 1):.4g}, 1] for "
+                         f"{args.m} measurements")
+    defaults = {"cohorts": 60, "mix": "thesis", "noise": 1.0, "quick": False, "seed": 0, "inline": False,
+                "no_cache": False}
+    for name, value in defaults.items():
+        setattr(args, name, value if getattr(args, name) is None else getattr(args, name))
+    return args
+
+
+def gpower(args):
+    from ..study.power import gpower_table
+    sizes = parse_sizes(args.n) if args.n else []
+    return gpower_table(args.m, args.f, args.rho, args.eps, args.alpha, sizes, args.power, n_max=MAX_N_ANALYTIC)
+
+
 def analytic(args):
     from ..study.power import effect_size_from_f, replication_plan
-
     F, df1, df2 = args.from_f
-    if not (float(df1).is_integer() and float(df2).is_integer()):
-        raise ValueError(f"--from-f: degrees of freedom must be integers, got {df1:g} {df2:g}")
-    return effect_size_from_f(F, int(df1), int(df2)), replication_plan(F, int(df1), int(df2), alpha=args.alpha)
+    est = effect_size_from_f(F, int(df1), int(df2))
+    return est, replication_plan(F, int(df1), int(df2), targets=tuple(args.power), alpha=args.alpha,
+                                 epsilon=args.eps, n_max=MAX_N_ANALYTIC)
 
 
 def simulate(args):
+    sizes = parse_sizes(args.n or ["6:40:2", "11"], MAX_N_SIMULATED, "a simulated cohort")
+    if args.cohorts > MAX_COHORTS:
+        raise ValueError(f"--cohorts {args.cohorts:,}: more than {MAX_COHORTS:,}" + _cost(max(sizes), args.cohorts))
     from ..study import cohort, cohort_power as cp, power_summary as ps, sweep
 
-    if args.cohorts < 1:
-        raise ValueError(f"--cohorts must be a positive integer, got {args.cohorts}")
-    sizes = parse_sizes(args.n)
     setting = cp.CohortSetting(mix=args.mix, noise_scale=args.noise,
                                **({"n_scenes": 15, "trial_seconds": 20.0, "quick_grid": True} if args.quick else {}))
     library, conservative = cohort.study_value_functions(quick=setting.quick_grid)
@@ -119,38 +276,28 @@ def simulate(args):
 def run_power(args):
     """The ``mutual study power`` command (``args`` from :func:`add_arguments`)."""
     try:
-        est, plan = analytic(args)
-        sim = None if args.analytic_only else simulate(args)
+        args = _checked(args)
+        if args.f is not None:
+            table, sim = gpower(args), None
+        else:
+            table = analytic(args)
+            sim = None if args.analytic_only else simulate(args)
     except ValueError as err:
         raise common.InputError(" ".join(str(err).split())) from None
-    outputs = {"plan": common.write_csv(plan, common.output_path(args, "power_plan.csv"))}
-    results = {"command": "study power", "analytic": {
-        "reported": {"F": est.F, "df1": est.df1, "df2": est.df2, "n": est.n, "m": est.m},
-        "eta2p": est.eta2p, "eta2p_bias_corrected": est.eta2p_unbiased, "eta2p_ci95": est.eta2p_ci,
-        "plan": plan.to_dict("records")}}
-    lines = [f"Analytic (G*Power RM convention) from F({est.df1}, {est.df2}) = {est.F:g}: {est!r}",
-             plan.to_string(index=False, float_format=lambda v: f"{v:.3f}")]
+    with common.output_set(args) as files:
+        if args.f is not None:
+            outputs = {"gpower": files.csv(table, "power_gpower.csv")}
+        else:
+            outputs = {"plan": files.csv(table[1], "power_plan.csv")}
+        if sim is not None:
+            setting, sizes, power, rec, effect, stats = sim
+            outputs["simulated"] = files.csv(power.assign(setting=setting.label), "power_simulated.csv")
+            outputs["recommended"] = files.csv(rec, "power_recommended.csv")
+            outputs["figure"] = files.figure(_figure(power, setting, args), "power_curves.png")
+    from .power_report import report_gpower, report_plan, report_simulated
+    results, lines = report_gpower(args, table) if args.f is not None else report_plan(args, *table)
     if sim is not None:
-        setting, sizes, table, rec, effect, stats = sim
-        outputs["simulated"] = common.write_csv(table.assign(setting=setting.label),
-                                                common.output_path(args, "power_simulated.csv"))
-        outputs["recommended"] = common.write_csv(rec, common.output_path(args, "power_recommended.csv"))
-        outputs["figure"] = common.save_figure(_figure(table, setting, args), common.output_path(args, "power_curves.png"))
-        results["simulated"] = {
-            "SIMULATED": True, "setting": setting.__dict__, "n": sizes, "cohorts": args.cohorts,
-            "power": table.to_dict("records"), "recommended": rec.to_dict("records"),
-            "implied_effect": {k: v for k, v in effect.items() if k != "cov"},
-            "sweep": {"tasks": stats.tasks, "cached": stats.cached, "computed": stats.computed, "workers": stats.workers,
-                      "where": stats.where, "seconds": stats.seconds}}
-        wide = table[table["test"].isin(["anova_gg", "tukey Standard-Learned", "holm Standard-Learned"])].assign(
-            cell=lambda d: [f"{p:.2f} [{lo:.2f}, {hi:.2f}]" for p, lo, hi in zip(d["power"], d["ci_low"], d["ci_high"])])
-        lines += [f"\nSIMULATED power ({setting.label}; {args.cohorts} cohorts per N; Wilson 95% intervals); "
-                  f"{stats.tasks} cohorts, {stats.cached} from the cache, {stats.seconds:.1f} s"
-                  + (f" on {stats.workers} workers at {stats.where}" if stats.where else ""),
-                  wide.pivot(index="n", columns="test", values="cell").to_string(),
-                  "\nRecommended N (SIMULATED):", rec.to_string(index=False),
-                  f"\nImplied effect (SIMULATED): eta2p = {effect['eta2p']:.3f}, epsilon = {effect['epsilon']:.3f}, "
-                  f"dz Standard-Learned = {effect['dz']['Standard-Learned']:.3f}"]
+        report_simulated(args, sim, results, lines)
     results["outputs"] = {k: str(v) for k, v in outputs.items()}
     lines.append("\nwrote " + ", ".join(results["outputs"].values()))
     common.report(args, "\n".join(lines), results)
@@ -174,7 +321,7 @@ def _figure(table, setting, args):
 
 def main(argv=None):
     """``mutual study power`` on its own (``python -m mutual.cli.power``); returns the exit status."""
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[1], epilog=EXAMPLE,
+    parser = argparse.ArgumentParser(prog=PROG, description=DESCRIPTION, epilog=EXAMPLE,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     parser.set_defaults(handler=run_power)

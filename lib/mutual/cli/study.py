@@ -9,6 +9,7 @@ level names the ``--within`` column holds.
 """
 
 import importlib
+import math
 import re
 
 from . import common
@@ -19,13 +20,17 @@ EXTENSIONS = ("power",)
 
 DESCRIPTION = """\
 One-way repeated-measures ANOVA of --dv over the levels of --within, one row per --subject and
-level (or several, averaged with --aggregate mean). Reports F, its degrees of freedom and p, the
-Greenhouse-Geisser epsilon and corrected p (sphericity), Tukey HSD for every pair of levels with
-the repeated-measures error term, and paired t-tests with Holm's correction.
+level (or several, averaged with --aggregate mean). Reports the ANOVA table (SS, df, MS, F, p), the
+Greenhouse-Geisser epsilon and corrected p (sphericity), partial and generalized eta squared, Tukey
+HSD for every pair of levels with the repeated-measures error term, and paired t-tests with Holm's
+correction.
 
 DATA.csv is any CSV table with a header; the study's tidy format (data/README.md) has one row per
 participant x trial x measure, so select a measure with --where measure=trips and average a
-participant's trials with --aggregate mean. Takes well under a second.
+participant's trials with --aggregate mean. Subject and level names are text exactly as written:
+01 and 1 are two subjects, NA and None are names; names that differ only in surrounding spaces are
+refused as ambiguous. Measured on the example (figures/benchmarks.md, a shared 2.3 GHz 2-core
+machine): 2.5-3.3 s of CPU, most of it importing scipy.stats, pandas and matplotlib; no JAX.
 
 writes to --out:  anova_<name>.csv (the test), pairwise_<name>.csv (Tukey and Holm),
                   cells_<name>.csv (the subject x level table analysed),
@@ -82,27 +87,37 @@ def _select(frame, args, path):
     """The rows and columns to analyse, with the file, column and line named on bad input."""
     filters = _filters(args.where)
     if args.dv not in frame.columns and {"measure", "value"} <= set(frame.columns) \
-            and (frame["measure"].astype(str) == args.dv).any():
+            and (frame["measure"] == args.dv).any():
         # a tidy trial table: --dv names a measure, analysed in the column 'value'
-        frame = frame[frame["measure"].astype(str) == args.dv].rename(columns={"value": args.dv})
+        frame = frame[frame["measure"] == args.dv].rename(columns={"value": args.dv})
     common.require_columns(frame, [args.dv, args.within, args.subject] + [c for c, _ in filters], path)
     for column, value in filters:
-        keep = frame[column].astype(str) == value
+        keep = frame[column].fillna("") == value          # compared as text, as written
         if not keep.any():
-            seen = sorted(frame[column].astype(str).unique().tolist())
-            raise common.InputError(f"{path}: no row has {column} = {value!r} (column {column!r} holds {seen[:12]})")
+            seen = sorted(frame[column].fillna("").unique().tolist())
+            raise common.InputError(f"{path}: no row has {column} = {value!r} (column {column!r} holds "
+                                    f"{[_shown(v) for v in seen[:12]]})")
         frame = frame[keep]
+    from ..csvfile import check_names
     for column in (args.subject, args.within):
-        empty = frame[column].isna() | (frame[column].astype(str).str.strip() == "")
+        empty = frame[column].isna() | (frame[column].fillna("").str.strip() == "")
         if empty.any():
             raise common.InputError(f"{path}: column {column!r}, line {int(frame.index[empty.argmax()]) + 2}: empty")
-    data = frame[[args.subject, args.within]].astype(str)
+        with common.about(path):
+            check_names(frame[column].tolist(), column, path, row=lambda i: f"line {int(frame.index[i]) + 2}")
+    data = frame[[args.subject, args.within]]
     return data.assign(**{args.dv: common.numeric_column(frame, args.dv, path)})
+
+
+def _shown(name, width=40):
+    """A name for a message or a table: quoted as written, long ones cut with an ellipsis."""
+    text = repr(name)
+    return text if len(text) <= width else text[:width - 4] + "...'"
 
 
 def _stem(args):
     parts = [args.dv] + [v for _, v in _filters(args.where)]
-    return re.sub(r"[^A-Za-z0-9_.-]+", "-", "_".join(parts)).strip("-") or "dv"
+    return re.sub(r"[^A-Za-z0-9_.-]+", "-", "_".join(parts)).strip("-")[:80] or "dv"
 
 
 def analyse(data, dv, within, subject, aggregate=None, levels=None):
@@ -110,16 +125,22 @@ def analyse(data, dv, within, subject, aggregate=None, levels=None):
     from ..study import pairwise_comparisons, rm_anova
     anova = rm_anova(data, dv=dv, within=within, subject=subject, aggregate=aggregate, levels=levels)
     pairwise = pairwise_comparisons(anova)
-    se = anova.cells.std(ddof=1) / len(anova.cells) ** 0.5
     return anova, pairwise, {
         "dv": dv, "within": within, "subject": subject, "aggregate": aggregate,
         "n_subjects": anova.n_subjects, "levels": [str(level) for level in anova.levels],
         "means": {str(k): float(v) for k, v in anova.means.items()},
-        "se": {str(k): float(v) for k, v in se.items()},
-        "F": anova.F, "df1": anova.df1, "df2": anova.df2, "p": anova.p,
-        "eps": anova.eps, "p_gg": anova.p_gg, "mse": anova.mse,
-        "pairwise": pairwise_comparisons(anova, as_records=True),
+        "se": {str(k): v for k, v in anova.standard_errors().items()},
+        "ss_effect": anova.ss_effect, "ss_error": anova.ss_error, "ss_subjects": anova.ss_subjects,
+        "df1": anova.df1, "df2": anova.df2, "ms_effect": anova.ms_effect, "ms_error": anova.mse,
+        "F": anova.F, "p": anova.p, "eps": anova.eps, "p_gg": anova.p_gg,
+        "eta2p": anova.eta2p, "eta2g": anova.eta2g, "mse": anova.mse,
+        "pairwise": [{k: str(v) if k in ("A", "B") else int(v) if k == "df" else float(v) for k, v in row.items()}
+                     for row in pairwise.to_dict("records")],        # the table's numbers (Tukey's p once)
     }
+
+
+TABLE_COLUMNS = ("dv", "within", "subject", "n_subjects", "ss_effect", "ss_error", "ss_subjects", "df1", "df2",
+                 "ms_effect", "ms_error", "F", "p", "eps", "p_gg", "eta2p", "eta2g", "mse")
 
 
 def run_anova(args):
@@ -132,8 +153,8 @@ def run_anova(args):
         present = sorted(set(data[args.within]))
         absent = [level for level in levels if level not in present]
         if absent:
-            raise common.InputError(f"{path}: --levels: no row has {args.within} = {absent[0]!r} "
-                                    f"(column {args.within!r} holds {present[:12]})")
+            raise common.InputError(f"{path}: --levels: no row has {args.within} = {_shown(absent[0])} "
+                                    f"(column {args.within!r} holds {[_shown(v) for v in present[:12]]})")
         data = data[data[args.within].isin(levels)]
     with common.about(path):
         try:
@@ -141,18 +162,18 @@ def run_anova(args):
         except ValueError as err:      # speak the command line's words, not the library's
             raise type(err)(str(err).replace("aggregate='mean'", "--aggregate mean")) from None
     results = {"command": "study anova", "input": str(path), "where": dict(_filters(args.where)), **results}
+    if not all(0 < abs(results[k]) < math.inf for k in ("ss_error", "ms_error")):
+        results["note"] = ("the sums and mean squares of data this large or small are beyond the range of doubles "
+                           "(null or 0 here); F, p, eps and eta squared were computed in scaled units and are exact")
 
     import pandas as pd
     stem = _stem(args)
-    table = pd.DataFrame([{k: results[k] for k in ("dv", "within", "subject", "n_subjects", "F", "df1", "df2", "p",
-                                                     "eps", "p_gg", "mse")}])
-    cells = anova.cells.reset_index()
-    outputs = {
-        "anova": common.write_csv(table, common.output_path(args, f"anova_{stem}.csv")),
-        "pairwise": common.write_csv(pairwise, common.output_path(args, f"pairwise_{stem}.csv")),
-        "cells": common.write_csv(cells, common.output_path(args, f"cells_{stem}.csv")),
-        "figure": common.save_figure(_figure(anova, pairwise, args), common.output_path(args, f"means_{stem}.png")),
-    }
+    table = pd.DataFrame([{k: results[k] for k in TABLE_COLUMNS}])
+    with common.output_set(args) as files:
+        outputs = {"anova": files.csv(table, f"anova_{stem}.csv"),
+                   "pairwise": files.csv(pairwise, f"pairwise_{stem}.csv"),
+                   "cells": files.csv(anova.cells.reset_index(), f"cells_{stem}.csv"),
+                   "figure": files.figure(_figure(anova, pairwise, args), f"means_{stem}.png")}
     results["outputs"] = {k: str(v) for k, v in outputs.items()}
     common.report(args, _summary(results, args), results)
 
@@ -161,19 +182,37 @@ def _figure(anova, pairwise, args):
     common.use_agg()
     import matplotlib.pyplot as plt
     from ..study.plots import plot_condition_means
+    anova, unit = _plotted(anova)
     fig, ax = plt.subplots(figsize=(1.6 + 1.1 * len(anova.levels), 3.4))
     plot_condition_means(ax, anova, pairwise.rename(columns={"p_tukey": "p"}))
-    low = float(anova.cells.to_numpy().min())
+    low, top = float(anova.cells.to_numpy().min()), ax.get_ylim()[1]
     if low < 0:                                   # the bars start at 0; show negative values too
-        top = ax.get_ylim()[1]
         ax.set_ylim(low - 0.05 * (top - low), top)
     selected = ", ".join(v for _, v in _filters(args.where))
-    ax.set_xlabel(args.within)
-    ax.set_ylabel((f"{selected} ({args.dv})" if selected else args.dv)
+    ax.set_xlabel(_cut(args.within))
+    ax.set_ylabel(_cut(f"{selected} ({args.dv})" if selected else args.dv) + unit
                   + ("\nmean per subject and level" if args.aggregate else ""))
-    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects}); grey: subjects; brackets: Tukey HSD p",
+    # the title in lines no wider than the axes (a long one was cut at the figure's right edge)
+    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects})\ngrey: subjects; brackets: Tukey HSD p",
                  fontsize=8)
     return fig
+
+
+def _plotted(anova):
+    """The ANOVA to draw, in units of 10^k when its values are too large or small for an axis (1e308 overflows
+    matplotlib's tick arithmetic), and the unit's label."""
+    import dataclasses
+    top = float(abs(anova.cells.to_numpy()).max())
+    if top == 0 or 1e-100 < top < 1e100:
+        return anova, ""
+    k = math.floor(math.log10(top))
+    cells = anova.cells / 10.0 ** k
+    means = {level: float(cells[level].mean()) for level in anova.levels}
+    return dataclasses.replace(anova, cells=cells, means=means), f" (x 1e{k})"
+
+
+def _cut(text, width=60):
+    return text if len(text) <= width else text[:width - 1] + "\u2026"
 
 
 def _summary(r, args):
@@ -181,17 +220,27 @@ def _summary(r, args):
     lines = [f"Repeated-measures ANOVA of {r['dv']!r}" + (f" ({where})" if where else "")
              + f" over {r['within']!r}, {r['n_subjects']} subjects"
              + (" (cells: mean of each subject's rows)" if r["aggregate"] else ""), ""]
-    width = max(len(str(level)) for level in r["levels"]) + 2
-    lines.append(f"  {'level':<{width}}{'mean':>10}{'SE':>10}")
+    names = {level: _shown(level)[1:-1] for level in r["levels"]}     # as written, long ones cut
+    width = max(len(name) for name in names.values()) + 2
+    lines.append(f"  {'level':<{width}}{'mean':>11}{'SE':>11}")
     for level in r["levels"]:
-        lines.append(f"  {level:<{width}}{r['means'][level]:>10.4g}{r['se'][level]:>10.3g}")
-    lines += ["", f"  F({r['df1']}, {r['df2']}) = {r['F']:.4g}, p = {r['p']:.4g}",
-              f"  sphericity: Greenhouse-Geisser epsilon = {r['eps']:.3f}, corrected p = {r['p_gg']:.4g}",
-              f"  error term MSE = {r['mse']:.4g}", "",
-              "  pairwise: Tukey HSD (repeated-measures error term) and paired t-tests (Holm-corrected)"]
-    lines.append(f"  {'A':<{width}}{'B':<{width}}{'diff':>9}{'q':>8}{'p Tukey':>10}{'t':>8}{'p Holm':>10}")
+        lines.append(f"  {names[level]:<{width}}{r['means'][level]:>11.4g}{r['se'][level]:>11.3g}")
+    source = _cut(r["within"], 16)
+    lines += ["", f"  {'source':<18}{'SS':>11}{'df':>5}{'MS':>11}{'F':>10}{'p':>11}{'eps':>7}{'p_GG':>11}"
+                  f"{'eta2p':>7}{'eta2G':>7}",
+              f"  {source:<18}{r['ss_effect']:>11.4g}{r['df1']:>5}{r['ms_effect']:>11.4g}{r['F']:>10.4g}{r['p']:>11.4g}"
+              f"{r['eps']:>7.3f}{r['p_gg']:>11.4g}{r['eta2p']:>7.3f}{r['eta2g']:>7.3f}",
+              f"  {'error':<18}{r['ss_error']:>11.4g}{r['df2']:>5}{r['ms_error']:>11.4g}",
+              f"  {'subjects':<18}{r['ss_subjects']:>11.4g}{r['n_subjects'] - 1:>5}", ""]
+    lines += [f"  F({r['df1']}, {r['df2']}) = {r['F']:.4g}, p = {r['p']:.4g}; Greenhouse-Geisser epsilon = "
+              f"{r['eps']:.3f}, corrected p = {r['p_gg']:.4g}",
+              f"  partial eta squared = {r['eta2p']:.3f}, generalized eta squared = {r['eta2g']:.3f}"]
+    if "note" in r:
+        lines.append(f"  ({r['note']})")
+    lines += ["", "  pairwise: Tukey HSD (repeated-measures error term) and paired t-tests (Holm-corrected)",
+              f"  {'A':<{width}}{'B':<{width}}{'diff':>10}{'q':>8}{'p Tukey':>10}{'t':>8}{'p Holm':>10}"]
     for row in r["pairwise"]:
-        lines.append(f"  {row['A']:<{width}}{row['B']:<{width}}{row['diff']:>9.4g}{row['q']:>8.3g}"
+        lines.append(f"  {names[row['A']]:<{width}}{names[row['B']]:<{width}}{row['diff']:>10.4g}{row['q']:>8.3g}"
                      f"{row['p_tukey']:>10.4g}{row['t']:>8.3g}{row['p_holm']:>10.4g}")
     lines += ["", "wrote " + ", ".join(r["outputs"].values())]
     return "\n".join(lines)

@@ -158,8 +158,9 @@ def run_fit(args):
                      "k": args.level, "alpha": fit.level(args.level), "coverage": fit.coverage(states, args.level),
                      "loglik": fit.loglik, "prior": args.prior, "at_library_edge": _at_edge(fit)})
     table = pd.DataFrame(rows)
-    outputs = {"table": common.write_csv(table, common.output_path(args, "supervisor_fit.csv"), float_format="%.6g"),
-               "figure": common.save_figure(_figure(fits, args), common.output_path(args, "supervisor_fit.png"))}
+    with common.output_set(args) as files:
+        outputs = {"table": files.csv(table, "supervisor_fit.csv"),
+                   "figure": files.figure(_figure(fits, args), "supervisor_fit.png")}
     results = {"command": "supervisor fit", "input": str(path), "grid": args.grid, "grid_shape": list(shape),
                "method": args.method,
                "library_w_max": w_maxes, "radius": args.radius, "speed": args.speed, "prior": args.prior,

@@ -4,7 +4,8 @@ Maximum-causal-entropy MDPs (:mod:`.mdp`), demonstrations (:mod:`.demonstrations
 of Section 3.3 (:mod:`.gridworld`), chance constraints and their thresholds (:mod:`.chance`,
 eq. 3.3), the backups of Algorithms 1-4 (:mod:`.backup`, compiled for grids in :mod:`.fast`),
 the candidate constraints (:mod:`.candidates`) and greedy inference (:mod:`.inference`, with the
-pruning bound of :mod:`.bounds`).
+pruning bound of :mod:`.bounds`). The same from continuous demonstrations -- an extension, Section
+3.4's next step -- is the subpackage :mod:`.continuous`.
 """
 
 from .backup import log_partition, rank_candidates, value_ratio

@@ -11,10 +11,12 @@ only time (and, to bound memory, blocks of candidates) is looped over.
 * :func:`log_partition` -- Algorithm 4 (the pure soft backup: log Z_{C+} = V_{C+,0}).
 * :func:`rank_candidates` -- log F and the exact likelihood gain of every candidate.
 
-Algorithm 4 runs on one of two engines: ``"jax"``, the compiled stencil backup of
-:mod:`.fast` (grids: successors at a few fixed index offsets), or ``"numpy"``, a log-space
-backup with a (sparse) matrix product per step that takes any MDP. ``engine="auto"`` (the
-default) uses jax where it applies; the tests check that both give the same numbers.
+Algorithm 4 runs on one of three engines: ``"jax"``, the compiled stencil backup of
+:mod:`.fast` (grids: successors at a few fixed index offsets), ``"gather"``, the same compiled
+backup for any MDP with at most ``fast.MAX_SUCCESSORS`` successors per state-action pair (the
+discretized continuous systems of :mod:`.continuous`), or ``"numpy"``, a log-space backup with a
+(sparse) matrix product per step that takes any MDP. ``engine="auto"`` (the default) uses jax
+where it applies, else numpy; the tests check that all three give the same numbers.
 """
 
 import numpy as np
@@ -27,7 +29,7 @@ from .mdp import check_mask, expected_next, masked_logsumexp, soft_bellman_backu
 
 
 _BLOCK_ENTRIES = 2 ** 22  # bound on X * A * (candidates per block): 32 MiB of float64
-ENGINES = ("auto", "jax", "numpy")
+ENGINES = ("auto", "jax", "numpy", "gather")
 
 
 def _masks(mdp, masks):
@@ -45,7 +47,8 @@ def log_partition(mdp, masks, engine="auto"):
 
     ``masks``: Phi_C as (X, A) or (X, A, K). Returns (X, K) (K = 1 for one mask).
     The backup runs in log space, so long horizons and large rewards are safe.
-    ``engine``: "auto", "jax" (compiled, grids only) or "numpy" (module docstring).
+    ``engine``: "auto", "jax" (compiled, grids only), "gather" (compiled, few successors per
+    state-action pair) or "numpy" (module docstring).
     """
     return _batched_backup(mdp, _masks(mdp, masks), engine=engine)[0]
 
@@ -54,6 +57,12 @@ def _engine_form(mdp, engine):
     """The stencil form for the compiled engine, or None for the numpy one."""
     if engine not in ENGINES:
         raise ValueError(f"engine: must be one of {ENGINES}, got {engine!r}")
+    if engine == "gather":
+        form = fast.gather_form(mdp)
+        if form is None:
+            raise ValueError(f"engine: the gather backup needs <= {fast.MAX_SUCCESSORS} successors per state-action "
+                             "pair, transition probabilities >= 1e-140 and jax installed; use engine='numpy'")
+        return form
     form = None if engine == "numpy" else fast.stencil_form(mdp)
     if engine == "jax" and form is None:
         raise ValueError("engine: the compiled backup needs successors at <= 27 fixed index offsets, "

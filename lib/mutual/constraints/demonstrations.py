@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
+from ..csvfile import check_header
 from ..seeds import generator
 from .mdp import MDP, check_mask, soft_policy
 
@@ -185,8 +186,9 @@ def load_demonstrations(path, mdp):
     action the state does not offer, a transition with zero probability under S -- raises
     a ValueError naming the file, the line (1 = the header) and the column.
     """
+    check_header(path)          # a duplicated column (pandas would rename it 'state.1') or another delimiter
     try:
-        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_values=[""])
+        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_values=[""], encoding="utf-8-sig")
     except pd.errors.EmptyDataError:
         raise ValueError(f"{path}: the file is empty; expected a header {','.join(DEMONSTRATION_COLUMNS)} "
                          "and one row per time step") from None

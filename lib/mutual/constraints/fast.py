@@ -22,10 +22,17 @@ probability exceeds 1e-140 (then p LOW < DEAD - 1e100, while every finite value 
 ``mdp.MAX_VALUE`` = 1e100 plus T log |A|). :func:`stencil_form` returns None -- and callers use
 the numpy backup -- when that fails, when the successors need more than ``MAX_OFFSETS``
 distinct offsets, or when jax is not installed.
+
+**Any layout** (the ``"gather"`` engine): an MDP whose every state-action pair reaches at most
+``MAX_SUCCESSORS`` states -- a discretized continuous system (:mod:`.continuous`), where the
+successors of a cell are not at offsets shared by all cells -- is written in *gather form*,
+index[x, a, j] and P[x, a, j] = S(x, a, index[x, a, j]) (padded with P = 0), and the same
+compiled scan computes E_{x'} V(x') = sum_j P[x, a, j] V(index[x, a, j]) by a gather per slot.
 """
 
 import os
 import weakref
+from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -34,12 +41,17 @@ import scipy.sparse as sp
 LOW, DEAD = -1e300, -1e150
 MIN_PROBABILITY = 1e-140
 MAX_OFFSETS = 27
+MAX_SUCCESSORS = 64      # the gather form: at most this many successors per state-action pair
 THREADS = min(2, os.cpu_count() or 1)   # blocks run concurrently (the compendium's machines have 2 cores)
 BLOCK_ENTRIES = 2 ** 18   # X * A * (candidates per block): 2 MiB of float64 per (X, A, K) temporary
 
 _FORMS = weakref.WeakKeyDictionary()
+_GATHER = weakref.WeakKeyDictionary()
 _EXACT = weakref.WeakKeyDictionary()
-_KERNEL = None
+_KERNELS = {}
+
+GatherForm = namedtuple("GatherForm", "index P")
+GatherForm.__doc__ = "S in gather form: index (X, A, J) int32 successors and P (X, A, J) their probabilities."
 
 
 def stencil_form(mdp):
@@ -66,6 +78,31 @@ def stencil_form(mdp):
     return form
 
 
+def gather_form(mdp):
+    """:class:`GatherForm` of any MDP whose state-action pairs reach at most ``MAX_SUCCESSORS``
+    states with probabilities >= ``MIN_PROBABILITY`` (module docstring), or None. Cached per MDP."""
+    if mdp in _GATHER:
+        return _GATHER[mdp]
+    form = None
+    try:
+        import jax  # noqa: F401
+    except ImportError:      # pragma: no cover - jax is in the lock
+        jax = None
+    csr = sp.csr_matrix(mdp.transitions)
+    csr.eliminate_zeros()
+    counts = np.diff(csr.indptr)
+    J = int(counts.max()) if counts.size else 0
+    if jax is not None and csr.nnz and 0 < J <= MAX_SUCCESSORS and csr.data.min() >= MIN_PROBABILITY:
+        X, A = mdp.n_states, mdp.n_actions
+        row = np.repeat(np.arange(X * A), counts)
+        slot = np.arange(csr.nnz) - np.repeat(csr.indptr[:-1], counts)
+        index, P = np.zeros((X * A, J), dtype=np.int32), np.zeros((X * A, J))
+        index[row, slot], P[row, slot] = csr.indices, csr.data
+        form = GatherForm(index.reshape(X, A, J), P.reshape(X, A, J))
+    _GATHER[mdp] = form
+    return form
+
+
 def sentinel_is_exact(mdp):
     """Whether -inf may be carried as LOW exactly: every positive S(x, a, x') >= MIN_PROBABILITY."""
     if mdp not in _EXACT:
@@ -83,22 +120,37 @@ def block_size(mdp, n):
     return min(sizes, key=lambda b: (-(-max(n, 1) // b) * b, -b))
 
 
-def _kernel():
-    global _KERNEL
-    if _KERNEL is None:
+def gather_block_size(mdp, n):
+    """Candidates per compiled block of the gather form: as :func:`block_size`, but a few candidates
+    (a round's baseline is one) get a block of their own size, 1, 2, 4 or 8, not 16."""
+    return min(block_size(mdp, n), 1 << (max(n, 1) - 1).bit_length())
+
+
+def _kernel(kind):
+    """The jitted backup scan for S in stencil form (``kind="stencil"``) or gather form (``"gather"``)."""
+    if kind not in _KERNELS:
         import jax
         import jax.numpy as jnp
 
-        def run(P, R, w, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
+        def expected(V, P, index, offsets, pad_lo, pad_hi):
+            """E_{x'} V(x') for every (x, a) and candidate: (X, A, Kb)."""
+            X, EV = V.shape[0], 0.0
+            if kind == "stencil":
+                Vp = jnp.pad(V, ((pad_lo, pad_hi), (0, 0)))
+                for j, o in enumerate(offsets):
+                    EV = EV + P[:, :, j, None] * jax.lax.slice_in_dim(Vp, pad_lo + o, pad_lo + o + X)[:, None, :]
+            else:
+                for j in range(P.shape[2]):
+                    EV = EV + P[:, :, j, None] * V[index[:, :, j]]
+            return EV
+
+        def run(P, index, R, w, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
             X, Kb = P.shape[0], forbidden.shape[2]
 
             def step(carry, inputs):
                 V, ll, infeasible = carry
                 x_t, a_t, ok = inputs
-                Vp = jnp.pad(V, ((pad_lo, pad_hi), (0, 0)))
-                EV = 0.0
-                for j, o in enumerate(offsets):
-                    EV = EV + P[:, :, j, None] * jax.lax.slice_in_dim(Vp, pad_lo + o, pad_lo + o + X)[:, None, :]
+                EV = expected(V, P, index, offsets, pad_lo, pad_hi)
                 Q = jnp.where(forbidden, -jnp.inf, EV + R[:, :, None])
                 top = Q.max(axis=1)
                 alive = top > DEAD
@@ -113,32 +165,36 @@ def _kernel():
             (V, ll, infeasible), _ = jax.lax.scan(step, init, (dx, da, valid))
             return V, ll, infeasible
 
-        _KERNEL = jax.jit(run, static_argnames=("offsets", "pad_lo", "pad_hi"))
-    return _KERNEL
+        _KERNELS[kind] = jax.jit(run, static_argnames=("offsets", "pad_lo", "pad_hi"))
+    return _KERNELS[kind]
 
 
 def backup_blocks(mdp, form, masks_of, n, demos=None):
     """Algorithm 4 for ``n`` candidate masks, compiled: ``masks_of(block)`` gives the allowed
-    masks Phi_C (X, A, k) of the candidates in ``block`` (a slice). Returns ``(V0, log_lik)``:
-    V_{C,0} as (X, n) and the demonstrations' log-likelihood (n,), -inf where infeasible."""
+    masks Phi_C (X, A, k) of the candidates in ``block`` (a slice); ``form`` is the stencil form
+    (:func:`stencil_form`) or a :class:`GatherForm`. Returns ``(V0, log_lik)``: V_{C,0} as (X, n)
+    and the demonstrations' log-likelihood (n,), -inf where infeasible."""
     import jax
     import jax.numpy as jnp
 
-    offsets, P = form
+    if isinstance(form, GatherForm):
+        kind, P, index, statics = "gather", form.P, form.index, dict(offsets=(), pad_lo=0, pad_hi=0)
+    else:
+        (offsets, P), kind, index = form, "stencil", np.zeros((1, 1, 1), dtype=np.int32)
+        statics = dict(offsets=offsets, pad_lo=max(0, -min(offsets)), pad_hi=max(0, max(offsets)))
     T, X = mdp.horizon, mdp.n_states
-    pad_lo, pad_hi = max(0, -min(offsets)), max(0, max(offsets))
     steps = 0 if demos is None else demos.steps
     dx = np.zeros((T, 1 if demos is None else demos.n), dtype=np.int32)
     da = np.zeros_like(dx)
     if demos is not None:
         dx[:steps], da[:steps] = demos.states[:, :-1].T, demos.actions.T
     valid = np.arange(T) < steps
-    kb = block_size(mdp, max(n, 1))
+    kb = block_size(mdp, max(n, 1)) if kind == "stencil" else gather_block_size(mdp, max(n, 1))
     V0, log_lik = np.empty((X, n)), np.empty(n)
     with jax.enable_x64(True):
-        args = [jnp.asarray(a) for a in (P, mdp.reward, mdp.terminal_reward)]
+        args = [jnp.asarray(a) for a in (P, index, mdp.reward, mdp.terminal_reward)]
         rev = [jnp.asarray(a[::-1].copy()) for a in (dx, da, valid)]
-        run = _kernel()
+        run = _kernel(kind)
 
         def one(block):
             masks = masks_of(block)
@@ -146,7 +202,7 @@ def backup_blocks(mdp, form, masks_of, n, demos=None):
             forbidden = np.concatenate([~masks, np.broadcast_to(~mdp.allowed[:, :, None], (X, mdp.n_actions, pad))],
                                        axis=2)
             with jax.enable_x64(True):      # a thread-local setting: each worker enters it
-                out = run(*args, jnp.asarray(forbidden), *rev, offsets=offsets, pad_lo=pad_lo, pad_hi=pad_hi)
+                out = run(*args, jnp.asarray(forbidden), *rev, **statics)
                 _collect((block, out), V0, log_lik)
 
         blocks = [slice(start, min(start + kb, n)) for start in range(0, n, kb)]

@@ -7,8 +7,9 @@ T). A candidate makes the demonstrations infeasible (likelihood 0) exactly when 
 (x_t, a_t) is forbidden or reaches a state dead at t + 1. With slip and no loiter away from the
 goal, one forbidden neighbourhood kills a whole grid this way (Section 3.3's set-up), so most
 hard (psi = 0) candidates are infeasible; :func:`infeasible_candidates` finds them for 32
-candidates per machine word, on grids by a compiled stencil (:mod:`.fast`), elsewhere by a
-sparse boolean product.
+candidates per machine word, on grids by a compiled stencil (:mod:`.fast`), on large MDPs with few
+successors per state-action pair (discretized continuous systems) by the compiled gather form,
+elsewhere by a sparse boolean product.
 """
 
 import numpy as np
@@ -16,26 +17,32 @@ import scipy.sparse as sp
 
 from . import fast
 
-_KERNEL = None
+_KERNELS = {}
+GATHER_ROWS = 2 ** 14   # state-action pairs X * A from which a non-grid MDP uses the compiled gather form
+GATHER_WORDS = 4        # ... for 32 x GATHER_WORDS candidates per call (one compiled shape)
 
 
-def _kernel():
-    global _KERNEL
-    if _KERNEL is None:
+def _kernel(kind):
+    """The jitted boolean backup for S in stencil form (``"stencil"``) or gather form (``"gather"``)."""
+    if kind not in _KERNELS:
         import jax
         import jax.numpy as jnp
 
-        def run(reaches, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
+        def run(reaches, index, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
             X, A, W = forbidden.shape
 
             def step(carry, inputs):
                 dead, infeasible = carry
                 x_t, a_t, ok = inputs
-                padded = jnp.pad(dead, ((pad_lo, pad_hi), (0, 0)))
                 reach = jnp.zeros_like(forbidden)
-                for j, o in enumerate(offsets):
-                    shifted = jax.lax.slice_in_dim(padded, pad_lo + o, pad_lo + o + X)
-                    reach = reach | jnp.where(reaches[:, :, j, None], shifted[:, None, :], jnp.uint32(0))
+                if kind == "stencil":
+                    padded = jnp.pad(dead, ((pad_lo, pad_hi), (0, 0)))
+                    for j, o in enumerate(offsets):
+                        shifted = jax.lax.slice_in_dim(padded, pad_lo + o, pad_lo + o + X)
+                        reach = reach | jnp.where(reaches[:, :, j, None], shifted[:, None, :], jnp.uint32(0))
+                else:
+                    for j in range(reaches.shape[2]):
+                        reach = reach | jnp.where(reaches[:, :, j, None], dead[index[:, :, j]], jnp.uint32(0))
                 bad = forbidden | reach
                 dead = bad[:, 0]
                 for a in range(1, A):
@@ -47,8 +54,18 @@ def _kernel():
             (_, infeasible), _ = jax.lax.scan(step, init, (dx, da, valid))
             return infeasible
 
-        _KERNEL = jax.jit(run, static_argnames=("offsets", "pad_lo", "pad_hi"))
-    return _KERNEL
+        _KERNELS[kind] = jax.jit(run, static_argnames=("offsets", "pad_lo", "pad_hi"))
+    return _KERNELS[kind]
+
+
+def _padded(words):
+    return np.pad(words, ((0, 0), (0, GATHER_WORDS - words.shape[1])))
+
+
+def _run(kind, args, statics, words, dx, da, valid):
+    import jax.numpy as jnp
+    return np.asarray(_kernel(kind)(*(jnp.asarray(a) for a in args), jnp.asarray(words), jnp.asarray(dx),
+                                    jnp.asarray(da), jnp.asarray(valid), **statics))
 
 
 def _unpack(words, K):
@@ -74,20 +91,23 @@ def infeasible_candidates(mdp, demos, base_mask, forbidden):
     F = sp.coo_matrix(forbidden.reshape(X * A, -1) if not sp.issparse(forbidden) else forbidden)
     K = F.shape[1]
     form = fast.stencil_form(mdp)
+    gather = fast.gather_form(mdp) if form is None and X * A >= GATHER_ROWS else None
     dx, da, valid = _demo_steps(mdp, demos)
-    if form is not None:
-        import jax.numpy as jnp
-
+    if form is not None or gather is not None:
         W = -(-K // 32)
         words = np.zeros((X * A, W), dtype=np.uint32)
         words[~base.ravel()] = np.uint32(0xFFFFFFFF)
         hit = F.data.astype(bool)
         np.bitwise_or.at(words, (F.row[hit], F.col[hit] // 32), (np.uint32(1) << (F.col[hit] % 32).astype(np.uint32)))
-        offsets, P = form
-        out = _kernel()(jnp.asarray(P > 0), jnp.asarray(words.reshape(X, A, W)), jnp.asarray(dx), jnp.asarray(da),
-                        jnp.asarray(valid), offsets=offsets, pad_lo=max(0, -min(offsets)),
-                        pad_hi=max(0, max(offsets)))
-        return _unpack(np.asarray(out), K)
+        if form is not None:
+            offsets, P = form
+            args, statics = (P > 0, np.zeros((1, 1, 1), dtype=np.int32)), dict(
+                offsets=offsets, pad_lo=max(0, -min(offsets)), pad_hi=max(0, max(offsets)))
+            return _unpack(_run("stencil", args, statics, words.reshape(X, A, W), dx, da, valid), K)
+        args, statics = (gather.P > 0, gather.index), dict(offsets=(), pad_lo=0, pad_hi=0)
+        out = [_run("gather", args, statics, _padded(words[:, w:w + GATHER_WORDS]).reshape(X, A, GATHER_WORDS),
+                    dx, da, valid) for w in range(0, W, GATHER_WORDS)]       # one compiled shape for any K
+        return _unpack(np.concatenate(out)[:W], K)
     masks = base[:, :, None] & ~F.toarray().astype(bool).reshape(X, A, K)
     reaches = sp.csr_matrix(mdp.transitions > 0, dtype=np.float64)
     dead = np.zeros((X, K), dtype=bool)

@@ -158,7 +158,7 @@ def _pruned_round(tasks, candidates, idx, mask, floor, engine, first=32):
 
 
 def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=None, criterion="F", prune=False,
-                     engine="auto"):
+                     engine="auto", on_round=None):
     """Greedy iterative constraint inference (Section 2.4, after Scobee and Sastry).
 
     Each round scores every feasible, not yet chosen candidate by Algorithm 4 and adds
@@ -176,10 +176,13 @@ def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=No
     demonstrations). ``prune=True`` (ranking by F only) scores exactly only the candidates
     whose upper bound on -log F (:mod:`.bounds`) could win the round: the same choices, far
     fewer backups on large worlds; unscored candidates get log F = nan in the history.
-    ``engine`` as in :func:`mutual.constraints.backup.log_partition`.
+    ``engine`` as in :func:`mutual.constraints.backup.log_partition`. ``on_round``, if given, is
+    called after each round is scored as ``on_round(i, log_f, gain, best)`` (``best``: the candidate
+    added, or None when this round ends inference): for progress, and to see the refused round.
     """
     tasks = as_tasks(mdp, demos)
     _check_inputs(tasks, candidates, rounds, min_gain, criterion, prune, engine)
+    notify = on_round or (lambda *args: None)
     mask = check_mask(tasks[0][0], base_mask, "base_mask") | ~tasks[0][0].allowed
     available = candidates.feasible.copy()
     chosen, history, gains, scored, stop = [], [], [], [], "rounds"
@@ -195,12 +198,15 @@ def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=No
         scored.append(int(n_scored))
         if not np.isfinite(gain).any():
             stop = "min_gain" if prune and n_scored == 0 and idx.size else "no feasible candidate"
+            notify(len(chosen), log_f, gain, None)
             break
         score = np.where(np.isfinite(gain), -log_f if criterion == "F" else gain, -np.inf)
         best = int(np.argmax(score))
         if min_gain is not None and -log_f[best] < min_gain:
             stop = "min_gain"
+            notify(len(chosen), log_f, gain, None)
             break
+        notify(len(chosen), log_f, gain, best)
         chosen.append(best)
         history.append(log_f)
         gains.append(gain)

@@ -7,19 +7,32 @@
 
 and what both chapters use:
 
-* :mod:`.observer` -- the Boltzmann observer of eq. (6.8) in closed form; :mod:`.belief` -- its
-  belief over time (Gaussian prefix marginals, exact or Laplace);
+* :mod:`.observer` -- the Boltzmann observer of eq. (6.8) in closed form; :mod:`.chain` -- its
+  density factored stage by stage (the Riccati factorisation, O(N) at any horizon);
+  :mod:`.belief` -- its belief over time (Gaussian prefix marginals, exact or Laplace);
 * :mod:`.trajopt` -- iLQR (Todorov & Li 2005; Tassa et al. 2012), compiled with JAX, and its
   single-shooting baselines;
-* :mod:`.spec` -- a legible-motion problem read from TOML (``mutual motion legible``), and
+* :mod:`.spec` -- a legible-motion problem read from TOML (``mutual motion legible``; the Dubins
+  car in :mod:`.spec_dubins`), and
   :mod:`.animation` -- the belief animations of both chapters.
 """
 
-from .legible import (LinearDynamics, QuadraticCost, legible_trajectory, multi_distractor_qp, reaching_cost,
-                      receding_horizon, single_integrator, solve_lq)
+from .legible import (LinearDynamics, QuadraticCost, legible_trajectory, reaching_cost, receding_horizon,
+                      single_integrator, solve_lq)
 from .observer import log_likelihood_ratio, posterior_over_time
-from .trajopt import ILQRResult, ilqr
 
 __all__ = ["ILQRResult", "LinearDynamics", "QuadraticCost", "ilqr", "legible_trajectory", "log_likelihood_ratio",
            "multi_distractor_qp", "posterior_over_time", "reaching_cost", "receding_horizon", "single_integrator",
            "solve_lq"]
+
+
+def __getattr__(name):
+    """iLQR loads JAX and the QP cvxpy: both are imported on first use, so that the LQ path (chapter 6's
+    solvers and observer, ``mutual motion legible`` on the single integrator) starts in NumPy alone."""
+    if name in ("ILQRResult", "ilqr"):
+        from . import trajopt
+        return getattr(trajopt, name)
+    if name == "multi_distractor_qp":
+        from .legible.qp import multi_distractor_qp
+        return multi_distractor_qp
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

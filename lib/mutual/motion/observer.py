@@ -1,9 +1,17 @@
 """The Boltzmann observer of chapter 6 in closed form: for linear dynamics and quadratic costs,
-``P(u | H) = exp(-J(u)) / Z`` (eq. 6.8) is Gaussian in the stacked controls, so its partition
-function, the likelihood ratio ``Lambda`` (eq. 6.7) and its minimiser (Theorem 6.4.2) are exact."""
+``P(u | H) = exp(-J(u)) / Z`` (eq. 6.8) is Gaussian in the stacked controls, so its likelihoods,
+the likelihood ratio ``Lambda`` (eq. 6.7) and its minimiser (Theorem 6.4.2) are exact.
+
+The observer's likelihoods and beliefs are computed stage by stage (:mod:`mutual.motion.chain`:
+the Riccati factorisation of the block-banded precision, O(N) at any horizon). The lifted forms
+(:func:`lifted_dynamics`, :func:`lifted_cost`: the dense (N m)^2 Hessian over all stages) remain for
+what needs the whole matrix on small problems: the dense QP of :mod:`.legible.qp`, the second
+route of Theorem 6.4.2 (:func:`likelihood_ratio_minimiser`) and sampling; they refuse, before
+allocating, sizes beyond :data:`mutual.motion.chain.DENSE_LIMIT_BYTES`."""
 
 import numpy as np
-from scipy.special import log_softmax
+
+from .chain import check_dense_size, log_ratio_prefix, lq_chains
 
 
 def _check_x0_N(dynamics, x0, N):
@@ -31,6 +39,7 @@ def lifted_dynamics(dynamics, x0, N):
     """``x_k = Phi_k x0 + G_k u`` for the stacked controls ``u`` (N m,): returns ``(Phi x0, G)``
     with shapes (N+1, n) and (N+1, n, N m)."""
     x0 = _check_x0_N(dynamics, x0, N)
+    check_dense_size(N, dynamics.m, dynamics.n, "the lifted (dense) form over all stages")
     dyn = dynamics.stages(0, N)
     n, m = dyn.n, dyn.m
     A = np.broadcast_to(dyn.A, (N, n, n))
@@ -80,20 +89,18 @@ def _gaussian(H, h, c, name):
 
 
 def log_boltzmann(dynamics, cost, x0, us):
-    """``log P(u | H) = -J(u) - log Z`` (eqs. (6.8)-(6.9)); Gaussian in the stacked controls."""
+    """``log P(u | H) = -J(u) - log Z`` (eqs. (6.8)-(6.9)), as the sum of the observer's stage
+    conditionals (:mod:`mutual.motion.chain`): O(N), no partition function."""
     us = _check_controls(dynamics, us)
-    N = us.shape[0]
-    H, h, c = lifted_cost(dynamics, cost, x0, N)
-    _, _, log_z = _gaussian(H, h, c, "cost")
-    u = us.reshape(-1)
-    J = 0.5 * u @ H @ u + h @ u + c
-    return float(-J - log_z)
+    return float(lq_chains(dynamics, [cost], x0, len(us))[0].prefix_loglik(us)[-1])
 
 
 def log_likelihood_ratio(dynamics, J0, J1, x0, us):
-    """``log Lambda(u) = log P(u|H0) - log P(u|H1)`` (eq. (6.7)) with the closed-form partition
-    functions. Negative values are evidence for H1 over H0 (nats)."""
-    return log_boltzmann(dynamics, J0, x0, us) - log_boltzmann(dynamics, J1, x0, us)
+    """``log Lambda(u) = log P(u|H0) - log P(u|H1)`` (eq. (6.7)), exact and O(N) (the stable form of
+    :func:`mutual.motion.chain.log_ratio_prefix`). Negative values are evidence for H1 over H0 (nats)."""
+    us = _check_controls(dynamics, us)
+    g0, g1 = lq_chains(dynamics, [J0, J1], x0, len(us))
+    return float(log_ratio_prefix(us, g0, g1)[-1])
 
 
 def log_boltzmann_prefix(dynamics, cost, x0, us):
@@ -101,19 +108,11 @@ def log_boltzmann_prefix(dynamics, cost, x0, us):
     marginal of the Boltzmann density (eq. (6.8)) over the controls seen so far, the observer's
     evidence from a partial motion. Returns (N+1,); entry 0 is 0 and entry N is :func:`log_boltzmann`.
 
-    Exact: with the precision factored as ``H = U U'`` (``U`` upper triangular, a Cholesky
-    factorisation in reversed order), ``w = U'(u - mean)`` has ``w_i`` depending on ``u_0 .. u_i``
-    only, so the density is the product of the prefix conditionals ``phi(w_i) U_ii``.
+    Exact and O(N): the marginal of a prefix is the product of its stage conditionals, the
+    maximum-entropy LQR policy (:mod:`mutual.motion.chain`).
     """
     us = _check_controls(dynamics, us)
-    N, m = us.shape
-    H, h, c = lifted_cost(dynamics, cost, x0, N)
-    mean, _, _ = _gaussian(H, h, c, "cost")
-    rev = np.linalg.cholesky(H[::-1, ::-1])
-    U = rev[::-1, ::-1]                                  # upper triangular, H = U U'
-    w = U.T @ (us.reshape(-1) - mean)
-    terms = -0.5 * w ** 2 - 0.5 * np.log(2 * np.pi) + np.log(np.diag(U))
-    return np.concatenate([[0.0], np.cumsum(terms.reshape(N, m).sum(axis=1))])
+    return lq_chains(dynamics, [cost], x0, len(us))[0].prefix_loglik(us)
 
 
 def weighted_prefix_log_likelihood(dynamics, cost, x0, N, weights):
@@ -121,28 +120,29 @@ def weighted_prefix_log_likelihood(dynamics, cost, x0, N, weights):
     stacked controls: returns ``(Hw, hw, cw)`` with the sum equal to ``-(1/2 u'Hw u + hw'u + cw)``.
 
     A partial-viewing evidence weighted over time, as Dragan and Srinivasa weight their observer's
-    belief with ``f(t) = T - t`` (section 6.5). Exact: with ``H = U U'`` as in
-    :func:`log_boltzmann_prefix`, prefix ``k`` contributes the first ``k m`` squared components of
-    ``U'(u - mean)``, so the weighted sum is ``U diag(F) U'`` with ``F_i`` the total weight of the
-    prefixes that contain control coordinate ``i``.
+    belief with ``f(t) = T - t`` (section 6.5). Exact: prefix ``k`` is the sum of the stage
+    conditionals ``t < k`` (:mod:`mutual.motion.chain`), so with the whitened residual
+    ``r = W u + r0`` the weighted sum is ``-1/2 (Wu + r0)' F (Wu + r0)`` plus log-determinants, ``F_t``
+    the total weight of the prefixes that contain stage ``t``. Dense (N m)^2 output: small N.
     """
     w = np.asarray(weights, float)
     if w.shape != (N,) or not np.all(np.isfinite(w)):
         raise ValueError(f"weights must be {N} finite numbers (one per prefix k = 1 .. N), got shape {w.shape}")
-    H, h, c = lifted_cost(dynamics, cost, x0, N)
-    mean, _, _ = _gaussian(H, h, c, "cost")
-    m = H.shape[0] // N
-    U = np.linalg.cholesky(H[::-1, ::-1])[::-1, ::-1]
-    F = np.repeat(np.cumsum(w[::-1])[::-1], m)                  # F_i = sum_{k > i // m} w_k
-    Hw = (U * F) @ U.T
-    log_norm = np.sum(F * (np.log(np.diag(U)) - 0.5 * np.log(2 * np.pi)))
-    return Hw, -Hw @ mean, float(0.5 * mean @ Hw @ mean - log_norm)
+    chain = lq_chains(dynamics, [cost], x0, N)[0]
+    W, r0 = chain.whitening()
+    F_stage = np.cumsum(w[::-1])[::-1]                          # F_t = sum_{k > t} w_k
+    F = np.repeat(F_stage, chain.m)
+    Hw = W.T @ (F[:, None] * W)
+    log_norm = F_stage @ chain.half_logdets - F.sum() * 0.5 * np.log(2 * np.pi)
+    return 0.5 * (Hw + Hw.T), W.T @ (F * r0), float(0.5 * r0 @ (F * r0) - log_norm)
 
 
 def posterior_over_time(dynamics, costs, x0, us, prior=None):
     """The observer's belief ``P(H_i | u_{0:k})`` over the hypotheses ``costs`` after each prefix
     ``k = 0 .. N`` of the motion (Bayes' rule on :func:`log_boltzmann_prefix`, eq. (6.8));
-    shape (N+1, len(costs)), row 0 the prior (default uniform)."""
+    shape (N+1, len(costs)), row 0 the prior (default uniform). Each hypothesis's log-likelihood is
+    taken relative to the first one's in the stable form of :func:`mutual.motion.chain.log_ratio_prefix`,
+    then normalised by log-sum-exp."""
     costs = list(costs)
     if len(costs) < 2:
         raise ValueError(f"costs must list at least two hypotheses, got {len(costs)}")
@@ -153,8 +153,11 @@ def posterior_over_time(dynamics, costs, x0, us, prior=None):
         if p.shape != (len(costs),) or not np.all(np.isfinite(p)) or np.any(p <= 0):
             raise ValueError(f"prior must be {len(costs)} positive probabilities, got {prior!r}")
         log_prior = np.log(p / p.sum())
-    logs = np.stack([log_boltzmann_prefix(dynamics, J, x0, us) for J in costs], axis=1)
-    return np.exp(log_softmax(logs + log_prior, axis=1))
+    us = _check_controls(dynamics, us)
+    chains = lq_chains(dynamics, costs, x0, len(us))
+    logs = np.stack([-log_ratio_prefix(us, chains[0], g) for g in chains], axis=1) + log_prior  # log P_i - log P_0
+    top = logs.max(axis=1, keepdims=True)
+    return np.exp(logs - top - np.log(np.exp(logs - top).sum(axis=1, keepdims=True)))      # log-sum-exp
 
 
 def likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0):

@@ -13,7 +13,7 @@ solves the multi-distractor QP of section 6.5, ``min J_1 s.t. J_1 - J_0i <= eta`
 
 ``dynamics = "single-integrator"`` (``x' = u`` in the plane, eq. 6.5) is solved exactly by LQR;
 ``"dubins"`` (the car of eq. 7.5, state ``(x, y, theta)``, constant speed, turn rate ``u``) by
-iLQR (:func:`mutual.motion.trajopt.ilqr`) from several constant-turn starts, keeping the best.
+iLQR from several constant-turn starts, keeping the best (:mod:`mutual.motion.spec_dubins`).
 
 The spec (every key; see ``data/README.md``)::
 
@@ -44,7 +44,18 @@ DYNAMICS = ("single-integrator", "dubins")
 _KEYS = {"dynamics", "start", "goal", "distractors", "horizon", "steps", "alpha", "eta", "terminal_weight",
          "effort_weight", "speed", "anticipation"}
 _ANTICIPATION_KEYS = {"alpha_start", "alpha_end", "every"}
-DUBINS_STARTS = (0.0, 0.5, -0.5, 1.0, -1.0)    # constant turn rates (rad/s) iLQR starts from
+MAX_STEPS = 10_000
+BYTES_PER_STEP = 400            # per step and hypothesis: motions, gains, observer factors (measured 190-360 B)
+# Every magnitude of a spec (a coordinate, a weight, dt, alpha, |eta|, speed) lies within [1e-50, 1e50], so that the
+# products the solvers form (squared distances times weights over time steps, the legible weights, ...) stay well
+# inside float64's range (~1e308); alpha >= 1e-6, since (1 + alpha) J1 - J0 keeps only alpha's share of the
+# quadratic cost and float64 rounds 1 + alpha to a relative 1e-16 / alpha; a distractor must lie farther than
+# 1e-9 of the positions' scale from the goal, or float64 cannot tell the two hypotheses apart.
+MAGNITUDE = 1e50
+ALPHA_MIN = 1e-6
+SEPARATION_RTOL = 1e-9
+HEADING_MAX = 1e6               # |theta| (rad): beyond it float64 resolves an angle to worse than 1e-10 rad
+REACH_RATIO = 1e9               # the Dubins car's reach and the goals' distance: within this factor of each other
 
 
 @dataclass(frozen=True)
@@ -81,25 +92,89 @@ def _fail(source, key, reason):
     raise ValueError(f"{source}: key {key!r}: {reason}")
 
 
+def _shown(v):
+    text = repr(v)
+    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
+
+
+def _finite_number(v):
+    """Is ``v`` a finite real number (not a bool)? An int too large for a float is not."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
 def _number(d, key, source, default=None, positive=False, prefix=""):
     if key not in d:
         if default is None:
             _fail(source, prefix + key, "missing (required)")
         return float(default)
     v = d[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        _fail(source, prefix + key, f"must be a finite number, got {v!r}")
+    if not _finite_number(v):
+        _fail(source, prefix + key, f"must be a finite number, got {_shown(v)}")
     if positive and v <= 0:
-        _fail(source, prefix + key, f"must be positive, got {v!r}")
+        _fail(source, prefix + key, f"must be positive, got {_shown(v)}")
     return float(v)
 
 
 def _point(v, key, source, sizes=(2,)):
-    if (not isinstance(v, list) or len(v) not in sizes
-            or not all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c) for c in v)):
+    if not isinstance(v, list) or len(v) not in sizes or not all(_finite_number(c) for c in v):
         shape = " or ".join(f"{n} numbers" for n in sizes)
-        _fail(source, key, f"must be a list of {shape}, got {v!r}")
+        _fail(source, key, f"must be a list of {shape}, got {_shown(v)}")
     return tuple(float(c) for c in v)
+
+
+def _within(source, key, value, low, high, why):
+    if not low <= abs(value) <= high:
+        _fail(source, key, f"must lie within [{low:g}, {high:g}] in magnitude, got {value:.6g}: {why}")
+
+
+def _check_reach(source, spec, goals):
+    """The car's reach ``speed * horizon`` and the goals' distance from the start within :data:`REACH_RATIO` of
+    each other: beyond, a turn changes the costs by less than iLQR's stopping test resolves (relative 1e-12)."""
+    reach = spec.speed * spec.horizon
+    key, far = max(((k, math.dist(p, spec.start[:2])) for k, p in goals), key=lambda kp: kp[1])
+    if far > REACH_RATIO * reach or reach > REACH_RATIO * far:
+        blame = key if far > reach else "speed"
+        _fail(source, blame, f"the car's reach speed x horizon = {reach:.3g} and the goals' distance {far:.3g} from "
+              f"the start differ by more than {REACH_RATIO:g} times: a turn would change the costs by less than "
+              "iLQR's stopping test resolves (relative 1e-12 of the cost)")
+
+
+def _check_magnitudes(source, spec):
+    """Refuse a spec whose numbers would take the solvers beyond float64 (see :data:`MAGNITUDE`), naming the key."""
+    points = [("start", spec.start[:2]), ("goal", spec.goal)] + [(f"distractors[{i}]", p)
+                                                                 for i, p in enumerate(spec.distractors)]
+    far = "squared distances times weights would leave float64's range; express the positions in larger units"
+    for key, p in points:
+        _within(source, key, max(abs(c) for c in p), 0.0, MAGNITUDE, far)
+    if spec.dynamics == "dubins":
+        _within(source, "start", spec.start[2], 0.0, HEADING_MAX, "float64 cannot resolve so large a heading (rad)")
+    scale = max(max(abs(c) for c in p) for _, p in points)
+    for i, g in enumerate(spec.distractors):
+        gap = math.dist(g, spec.goal)
+        if gap <= SEPARATION_RTOL * scale:
+            _fail(source, f"distractors[{i}]", f"lies {gap:.3g} from the goal, within {SEPARATION_RTOL:g} of the "
+                  f"positions' scale {scale:.3g} (the largest coordinate of start, goal and distractors): at that "
+                  "scale float64 cannot tell the two hypotheses apart")
+    small = "far from 1 in float64 terms: the cost's products would underflow or overflow; rescale the units"
+    for key in ("terminal_weight", "effort_weight") + (("speed",) if spec.dynamics == "dubins" else ()):
+        _within(source, key, getattr(spec, key), 1 / MAGNITUDE, MAGNITUDE, small)
+    _within(source, "horizon", spec.dt, 1 / MAGNITUDE, MAGNITUDE,
+            f"the time step horizon / steps = {spec.dt:.3g} s is {small}")
+    rounding = f"below {ALPHA_MIN:g}, float64's rounding of (1 + alpha) J1 - J0 (relative 1e-16 / alpha) shows"
+    alphas = [("alpha", spec.alpha)] if spec.alpha is not None else []
+    if spec.anticipation is not None:
+        alphas += [("anticipation.alpha_start", spec.anticipation[0]), ("anticipation.alpha_end", spec.anticipation[1])]
+    for key, a in alphas:
+        _within(source, key, a, ALPHA_MIN, MAGNITUDE, rounding if a < ALPHA_MIN else small)
+    if spec.eta is not None:
+        _within(source, "eta", spec.eta, 0.0, MAGNITUDE, "a bound on J1 - J0 (nats) beyond float64's reach")
+    if spec.dynamics == "dubins":
+        _check_reach(source, spec, points[1:])
 
 
 def legible_spec(mapping, source="spec"):
@@ -130,8 +205,13 @@ def legible_spec(mapping, source="spec"):
             _fail(source, f"distractors[{i}]", f"equals the goal {list(goal)}: nothing to tell apart")
     horizon = _number(d, "horizon", source, positive=True)
     steps = d.get("steps")
-    if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= 10_000:
-        _fail(source, "steps", f"must be an integer in 1..10000, got {steps!r}")
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+        _fail(source, "steps", f"must be an integer in 1..{MAX_STEPS}, got {_shown(steps)}")
+    if steps > MAX_STEPS:
+        many = float(min(steps, 10 ** 300))
+        _fail(source, "steps", f"must be an integer in 1..{MAX_STEPS}, got {_shown(steps)}: its motions, Riccati "
+              f"gains and observer factors would need about {many * BYTES_PER_STEP * (2 + len(distractors)) / 2 ** 30:.3g}"
+              f" GiB, and a solve would take {many / MAX_STEPS:.3g} times the few seconds {MAX_STEPS} steps take")
     has_alpha, has_eta = "alpha" in d, "eta" in d
     if has_alpha == has_eta:
         _fail(source, "alpha", "give exactly one of alpha (eq. 6.15) and eta (the QP of section 6.5)")
@@ -155,14 +235,16 @@ def legible_spec(mapping, source="spec"):
             _fail(source, "anticipation.alpha_end", f"must be >= alpha_start = {lo:g}, got {hi:g}")
         every = a.get("every", 1)
         if isinstance(every, bool) or not isinstance(every, int) or not 1 <= every <= steps:
-            _fail(source, "anticipation.every", f"must be an integer in 1..steps ({steps}), got {every!r}")
+            _fail(source, "anticipation.every", f"must be an integer in 1..steps ({steps}), got {_shown(every)}")
         anticipation = (lo, hi, every)
     if dynamics != "dubins" and "speed" in d:
         _fail(source, "speed", "only for dynamics = \"dubins\"")
-    return LegibleSpec(dynamics, start, goal, distractors, horizon, steps, alpha, eta, anticipation,
+    spec = LegibleSpec(dynamics, start, goal, distractors, horizon, steps, alpha, eta, anticipation,
                        _number(d, "terminal_weight", source, 1.0, positive=True),
                        _number(d, "effort_weight", source, 1.0, positive=True),
                        _number(d, "speed", source, 3.0, positive=True))
+    _check_magnitudes(source, spec)
+    return spec
 
 
 def load_legible_spec(path):
@@ -186,86 +268,104 @@ def solve_legible(spec):
     ``evidence`` -- per distractor and trajectory, ``log Lambda`` (eq. 6.7, exact for the
     single integrator; negative values favour the goal) or, for the Dubins car, ``J_1 - J_0``
     (equal to ``log Lambda`` up to a constant) -- and ``alphas`` (the weight in force at each
-    step) or ``duals`` (the QP's multipliers) where they apply.
+    step) or ``duals`` (the QP's multipliers) where they apply. A ValueError names the key when the
+    spec asks for what cannot be solved or represented; no output is ever NaN or infinite.
     """
     if not isinstance(spec, LegibleSpec):
         raise ValueError("spec must be a LegibleSpec (use legible_spec or load_legible_spec)")
     if spec.dynamics == "dubins":
-        return _solve_dubins(spec)
-    from . import legible as leg
-    from .observer import log_likelihood_ratio
-    from .legible.qp import multi_distractor_qp
-    dyn = leg.single_integrator(2, spec.dt)
+        from .spec_dubins import solve_dubins
+        out = solve_dubins(spec)
+    else:
+        out = _solve_single_integrator(spec)
+    _check_finite(out)
+    return out
+
+
+def _solve_single_integrator(spec):
+    """LQR, receding horizon or the QP, from one banded factorisation of the observer's Gaussians (eq. 6.8)
+    for the goal and each distractor (:mod:`mutual.motion.chain`): the goal's mode is the predictable
+    motion, and since the hypotheses share their quadratic part (eq. (6.17) with common weights), the
+    goal's gains with the mean of the distractors' feedforwards give every legible and anticipative
+    replan (:func:`mutual.motion.legible.objective.shared_quadratic_gains`)."""
+    from .chain import log_ratio_prefix, lq_chains, rollout
+    from .legible.objective import linear_alpha_schedule, mixed_feedforward, policy_rollout, scheduled_alphas
+    from .legible.problem import single_integrator
+    dyn = single_integrator(2, spec.dt)
     x0, N = np.array(spec.start), spec.steps
     J1, J0s = _costs(spec)
+    goal, *others = lq_chains(dyn, [J1] + J0s, x0, N)
+    predictable = (rollout(goal.A, goal.B, goal.c, x0, goal.mean), goal.mean)
     out = {"method": spec.method}
     if spec.method == "qp":
-        xs, us, duals = multi_distractor_qp(dyn, J1, J0s, x0, N, spec.eta)
-        out["duals"] = duals
-    elif spec.method == "receding-horizon":
-        lo, hi, every = spec.anticipation
-        xs, us, alphas = leg.receding_horizon(dyn, J1, leg.distractor_mixture(J0s), x0, N,
-                                              leg.linear_alpha_schedule(lo, hi), every)
-        out["alphas"] = alphas
+        xs, us, out["duals"] = _qp(spec, dyn, J1, J0s, x0, predictable)
     else:
-        sol = leg.legible_trajectory(dyn, J1, J0s, x0, N, spec.alpha)     # J0: the distractors' mean
-        xs, us = sol.xs, sol.us
-        out["alphas"] = np.full(N, spec.alpha)
-    plain = leg.solve(dyn, J1, x0, N)
-    out["legible"], out["predictable"] = (xs, us), (plain.xs, plain.us)
-    out["evidence"] = {name: [log_likelihood_ratio(dyn, J0, J1, x0, u) for J0 in J0s]
-                       for name, (_, u) in (("legible", out["legible"]), ("predictable", out["predictable"]))}
+        alphas = np.full(N, spec.alpha) if spec.anticipation is None else \
+            scheduled_alphas(linear_alpha_schedule(*spec.anticipation[:2]), N, spec.anticipation[2])
+        distractors = np.mean([other.k for other in others], axis=0)          # J0: the distractors' mean
+        xs, us = policy_rollout(dyn, x0, goal.K, mixed_feedforward(goal.k, distractors, 1.0 + alphas, 1.0))
+        out["alphas"] = alphas
+    out["legible"], out["predictable"] = (xs, us), predictable
+    out["evidence"] = {name: [float(log_ratio_prefix(u, other, goal, name=f"the {name} motion")[-1])
+                              for other in others]
+                       for name, (_, u) in (("legible", out["legible"]), ("predictable", predictable))}
     out["evidence_kind"] = "log Lambda"
     return out
 
 
-def _dubins_step(x, u, params):
-    from .evident.vehicles import dubins_step
-    return dubins_step(x, u, params["dt"], params["speed"])
+def evidence_gaps(spec, p):
+    """``J1 - J0_i`` for each distractor at the end point ``p`` (eq. (6.17): the effort cancels), as
+    ``2 w_T (g0i - g1).(p - (g0i + g1) / 2)``: no difference of two large squares."""
+    g1, p = np.array(spec.goal), np.asarray(p, float)[:2]
+    return np.array([2 * spec.terminal_weight * (g0 - g1) @ (p - (g0 + g1) / 2) for g0 in np.array(spec.distractors)])
 
 
-def _dubins_running(x, u, params):
-    import jax.numpy as jnp
-    return params["dt"] * params["effort"] * jnp.sum(u ** 2)
+def eta_bound(spec):
+    """The smallest ``eta`` any motion can meet: ``min_p max_i J1 - J0_i`` over the end point ``p`` (every
+    ``p`` is reachable, and with ``q = p - g1``, ``d_i = g0i - g1`` each ``J1 - J0_i = w_T (2 d_i.q - |d_i|^2)``
+    is affine). A linear program; ``-inf`` when no bound holds (the distractors do not surround the goal)."""
+    from scipy.optimize import linprog
+    d = np.array(spec.distractors) - np.array(spec.goal)
+    w = spec.terminal_weight
+    lp = linprog([0.0, 0.0, 1.0], A_ub=np.hstack([2 * w * d, -np.ones((len(d), 1))]),
+                 b_ub=w * np.einsum("ij,ij->i", d, d), bounds=[(None, None)] * 3, method="highs")
+    return -np.inf if lp.status == 3 else float(lp.fun)
 
 
-def _dubins_terminal(x, params):
-    """``w1 |p_N - g_1|^2 - sum_i w0 |p_N - g_0i|^2`` on the planar position ``p_N``."""
-    import jax.numpy as jnp
-    p = x[:2]
-    return (params["w1"] * jnp.sum((p - params["goal"]) ** 2)
-            - params["w0"] * jnp.sum((p[None, :] - params["distractors"]) ** 2))
+def _qp(spec, dyn, J1, J0s, x0, predictable):
+    """The multi-distractor QP of section 6.5 for ``spec.eta``; a ValueError names ``eta`` when no motion
+    meets it, or when the solver cannot."""
+    bound = eta_bound(spec)
+    if np.isfinite(bound) and not spec.eta > bound + 1e-9 * max(1.0, abs(bound)):
+        raise ValueError(f"key 'eta': no motion meets J1 - J0_i <= eta = {spec.eta:g} for every distractor: the "
+                         f"smallest bound any end point meets is {bound:.6g}, so eta must exceed it")
+
+    loose = evidence_gaps(spec, predictable[0][-1]).max()
+    if loose <= spec.eta:                               # the constraints do not bind: the predictable motion
+        return (*predictable, np.zeros(len(J0s)))
+    from .legible.qp import multi_distractor_qp          # cvxpy: imported only when the bound binds
+    try:
+        xs, us, duals = multi_distractor_qp(dyn, J1, J0s, x0, spec.steps, spec.eta)
+    except ValueError:
+        reach = (loose - spec.eta) / (2 * spec.terminal_weight * min(math.dist(g, spec.goal) for g in spec.distractors))
+        raise ValueError(f"key 'eta': the QP solver failed for eta = {spec.eta:g}, though end points meeting it exist "
+                         f"(the smallest bound any end point meets is {bound:.6g}): they lie about {reach:.3g} beyond "
+                         f"the predictable one, farther than the solver resolves; choose an eta nearer the "
+                         f"predictable motion's max J1 - J0_i = {loose:.6g}") from None
+    worst = evidence_gaps(spec, xs[-1]).max()
+    if not worst <= spec.eta + 1e-6 * max(1.0, abs(spec.eta), abs(bound) if np.isfinite(bound) else 0.0):
+        raise ValueError(f"key 'eta': the QP solver returned a motion with J1 - J0 = {worst:.6g} > eta = "
+                         f"{spec.eta:g}: eta = {spec.eta:g} is too close to what any motion can meet ({bound:.6g})")
+    return xs, us, duals
 
 
-def _dubins_params(spec, w1, w0, effort):
-    return {"dt": np.float64(spec.dt), "speed": np.float64(spec.speed), "w1": np.float64(w1), "w0": np.float64(w0),
-            "effort": np.float64(effort), "goal": np.array(spec.goal), "distractors": np.array(spec.distractors)}
-
-
-def _best_ilqr(spec, params):
-    from .trajopt import ILQRError, ilqr
-    found, errors = [], []
-    for rate in DUBINS_STARTS:
-        try:
-            found.append(ilqr(_dubins_step, _dubins_running, _dubins_terminal, np.array(spec.start),
-                              np.full((spec.steps, 1), rate), params))
-        except ILQRError as err:
-            errors.append(str(err))
-    if not found:
-        raise RuntimeError(f"iLQR found no local minimum from any of the starts {DUBINS_STARTS}: {errors[0]}")
-    return min(found, key=lambda r: r.cost)
-
-
-def _solve_dubins(spec):
-    wT, wu, K, a = spec.terminal_weight, spec.effort_weight, len(spec.distractors), spec.alpha
-    # (1 + alpha) J1 - mean J0: goal weight (1 + alpha) wT, each distractor -wT / K, effort alpha wu
-    legible = _best_ilqr(spec, _dubins_params(spec, (1 + a) * wT, wT / K, a * wu))
-    plain = _best_ilqr(spec, _dubins_params(spec, wT, 0.0, wu))
-
-    def difference(xs, us):         # J1 - J0_i per distractor (effort cancels)
-        p = xs[-1, :2]
-        return [float(wT * (np.sum((p - spec.goal) ** 2) - np.sum((p - g) ** 2))) for g in np.array(spec.distractors)]
-
-    return {"method": "ilqr", "legible": (legible.xs, legible.us), "predictable": (plain.xs, plain.us),
-            "alphas": np.full(spec.steps, a), "evidence_kind": "J1 - J0",
-            "evidence": {"legible": difference(legible.xs, legible.us), "predictable": difference(plain.xs, plain.us)}}
+def _check_finite(out):
+    """Refuse a solution with NaN or infinite values (never printed as null), naming the keys that set its scale."""
+    parts = {"legible motion": out["legible"], "predictable motion": out["predictable"],
+             "evidence": list(out["evidence"].values()), "weights": out.get("alphas", 0.0),
+             "multipliers": out.get("duals", 0.0)}
+    for what, value in parts.items():
+        if not all(np.all(np.isfinite(np.asarray(a, float))) for a in (value if isinstance(value, (tuple, list))
+                                                                       else [value])):
+            raise ValueError(f"keys 'start', 'goal', 'distractors', 'horizon', 'steps' and the weights: the {what} "
+                             "left float64's range (non-finite values); bring the spec's numbers nearer to 1")

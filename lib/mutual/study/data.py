@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from ..supervision.supervisor import OPTIONAL_COLUMNS, REQUIRED_COLUMNS, validate_interventions
+from ..csvfile import check_header, check_names, format_exact
 from .design import DESIGN_COLUMNS
 
 TRIAL_COLUMNS = ["participant", "comparison", "order", "treatment", "task_version", "trial", "measure", "value"]
@@ -113,7 +113,9 @@ def validate_trials(df, treatments=None, where=None):
     _require(df, TRIAL_COLUMNS, where)
     df = df[TRIAL_COLUMNS].copy()
     for col in ("participant", "comparison", "treatment", "measure"):
-        df[col] = df[col].astype(str).str.strip()
+        df[col] = df[col].astype(str)
+        check_names(df[col], col, where.table(), _row_namer(df, where))
+        df[col] = df[col].str.strip()
     if treatments is not None:
         if isinstance(treatments, str) or not hasattr(treatments, "__iter__"):
             raise ValueError(f"treatments must be a list of names, got {treatments!r}")
@@ -180,13 +182,21 @@ def validate_long(df, dv, within, subject, where=None):
     if len({dv, within, subject}) < 3:
         raise ValueError(f"dv, within and subject must be three different columns, got {dv!r}, {within!r}, {subject!r}")
     _require(df, [dv, within, subject], where)
+    for col in (within, subject):
+        check_names(df[col], col, where.table(), _row_namer(df, where))
     out = df.copy()
     out[dv] = _numbers(df, dv, where).astype(float)
     return out.reset_index(drop=True)
 
 
+def _row_namer(df, where):
+    """How :func:`mutual.csvfile.check_names` names the ``i``-th row of ``df``: its file line or its label."""
+    return (lambda i: f"line {i + 2}") if where.path is not None else (lambda i: f"row {df.index[i]!r}")
+
+
 def _validate_interventions(df, where):
     """Row-level checks of an interventions table (naming the row and column), then chapter 4's validator."""
+    from ..supervision.supervisor import OPTIONAL_COLUMNS, REQUIRED_COLUMNS, validate_interventions
     _require(df, list(REQUIRED_COLUMNS), where)
     _numbers(df, "trial", where, whole=True, low=0, what="a non-negative whole number")
     _numbers(df, "time", where, low=0, what="a non-negative number of seconds")
@@ -231,8 +241,9 @@ def read_table(path, kind="trials", **options):
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
+    check_header(path)
     try:
-        df = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
+        df = pd.read_csv(path, dtype=str, keep_default_na=False, encoding="utf-8-sig")
     except pd.errors.EmptyDataError:
         raise ValueError(f"{path}: the file is empty (no header row, no data)") from None
     except pd.errors.ParserError as err:
@@ -241,16 +252,23 @@ def read_table(path, kind="trials", **options):
         raise ValueError(f"{path}: not a UTF-8 text file") from None
     if len(df) == 0:
         raise ValueError(f"{path}: has a header but no data rows")
+    df.columns = [c.strip() for c in df.columns]     # "a, b" headers; check_header refused "b" twice
     df = df.replace("", np.nan)
     return _validate(df, kind, _Where(str(path), path), options)
 
 
-def write_table(df, path, kind="trials", **options):
-    """Check ``df`` as a ``kind`` table (see :func:`read_table`) and write it atomically as CSV."""
+def write_table(df, path, kind="trials", digits=None, **options):
+    """Check ``df`` as a ``kind`` table (see :func:`read_table`) and write it atomically as CSV.
+
+    Numbers are written exactly (they read back as the same doubles, :func:`mutual.csvfile.format_exact`);
+    ``digits=d`` rounds them to ``d`` significant digits instead (a presentation choice).
+    """
     _check_kind(kind, options)
+    if digits is not None and (isinstance(digits, bool) or not isinstance(digits, int) or not 1 <= digits <= 17):
+        raise ValueError(f"digits must be None (exact) or a whole number in 1..17, got {digits!r}")
     df = _validate(df, kind, _Where(f"{kind} table"), options)
     with atomic_path(path) as tmp:
-        df.to_csv(tmp, index=False, float_format="%.6g")
+        df.to_csv(tmp, index=False, float_format=format_exact if digits is None else f"%.{digits}g")
     return path
 
 

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 TREATMENTS = ("Standard", "Learned", "Conservative")
+OBSTACLE_RADIUS = 1.0     # the teaming task's obstacles (positions are in these units; Sec. 5.2.2)
 N_VERSIONS = 6
 DESIGN_COLUMNS = ["participant", "trial", "comparison", "order", "treatment", "task_version"]
 

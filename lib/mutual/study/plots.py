@@ -6,8 +6,8 @@ misaligned-expectations illustration (Fig. 5.1). Positions are in units of the o
 import numpy as np
 from matplotlib.patches import Circle
 
+from .design import OBSTACLE_RADIUS
 from .stats import RMAnova, significance_stars
-from .teaming import OBSTACLE_RADIUS
 
 POSITION_LABEL = "{} (obstacle radii)"
 
@@ -82,25 +82,35 @@ def plot_condition_means(ax, anova, tukey=None, colors=None, show_subjects=True)
         raise ValueError(f"anova must be an RMAnova, got {type(anova).__name__}")
     levels = list(anova.levels)
     cells = anova.cells[levels]
-    means, se = cells.mean(), cells.std(ddof=1) / np.sqrt(len(cells))
+    errors = anova.standard_errors()
+    means, se = np.array([anova.means[lv] for lv in levels]), np.array([errors[lv] for lv in levels])
     x = np.arange(len(levels))
     if show_subjects:
         for row in cells.to_numpy():
             ax.plot(x, row, color="0.75", lw=0.6, zorder=1)
     ax.bar(x, means, yerr=se, capsize=4, color=colors or None, alpha=0.85, zorder=2,
            error_kw={"zorder": 3, "label": f"mean ± SE (n = {anova.n_subjects})"})
-    ax.set_xticks(x, [str(level) for level in levels])
-    top = float(max((means + se).max(), cells.to_numpy().max()))
-    step = 0.09 * top if top > 0 else 0.1
+    ax.set_xticks(x, [_short(level) for level in levels])
+    with np.errstate(over="ignore"):
+        top = float(max((means + se).max(), cells.to_numpy().max()))
+        step = 0.09 * top if top > 0 else 0.1
     rows = [] if tukey is None else list(tukey.itertuples())
     for i, row in enumerate(rows):
         a, b = levels.index(row.A), levels.index(row.B)
         y = top + step * (i + 1)
         ax.plot([a, a, b, b], [y - step * 0.3, y, y, y - step * 0.3], color="black", lw=0.8)
         ax.text((a + b) / 2, y, f"{significance_stars(row.p)} (p={row.p:.3g})", ha="center", va="bottom", fontsize=7)
-    ax.set_ylim(0, top + step * (len(rows) + 1.2))
+    high = top + step * (len(rows) + 1.2)
+    if np.isfinite(high):                 # data near the largest double: leave matplotlib's limits
+        ax.set_ylim(0, high)
     ax.set_xlabel(str(anova.within))
     return ax
+
+
+def _short(name, width=24):
+    """A level name for a tick label: at most ``width`` characters, cut with an ellipsis."""
+    name = str(name)
+    return name if len(name) <= width else name[:width - 1] + "\u2026"
 
 
 def plot_misalignment(ax, approaches, supervisor, title=None, color="#0072B2", n_paths=12):

@@ -43,26 +43,37 @@ def _probability(name, value):
     return float(value)
 
 
-def _effect(f, partial_eta_squared, rho):
+def _number(name, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    return float(value)
+
+
+def _effect(f, partial_eta_squared, rho, m=None):
     """``f_p^2``, the squared effect on the error scale, from exactly one of the two effect sizes."""
     if (f is None) == (partial_eta_squared is None):
         raise ValueError("give exactly one of f (G*Power's effect size, with rho) and partial_eta_squared")
     if f is not None:
-        if not (np.isfinite(f) and f >= 0):
+        if not (np.isfinite(_number("f", f)) and f >= 0):
             raise ValueError(f"f must be a non-negative number, got {f!r}")
-        if rho is None or not (np.isfinite(rho) and -1 < rho < 1):
-            raise ValueError(f"rho (correlation among the repeated measures) must lie in (-1, 1), got {rho!r}")
+        low = -1.0 / (m - 1) if m is not None else -1.0
+        if rho is None or not (np.isfinite(_number("rho", rho)) and low <= rho < 1):
+            where = f"[-1/(m-1), 1) = [{low:.4g}, 1) for m = {m} measurements" if m is not None else "(-1, 1)"
+            raise ValueError(f"rho (correlation among the repeated measures) must lie in {where}, got {rho!r}: "
+                             "below -1/(m-1) no covariance matrix has equal correlations")
+        if float(f) > 1e150:
+            raise ValueError(f"f must be at most 1e150 (f^2 must stay within the range of doubles), got {f!r}")
         return float(f) ** 2 / (1.0 - rho)
     if rho is not None:
         raise ValueError("rho must not be given with partial_eta_squared: its error term already holds the "
                          "correlation (f_p^2 = eta_p^2 / (1 - eta_p^2))")
-    if not (np.isfinite(partial_eta_squared) and 0 <= partial_eta_squared < 1):
+    if not (np.isfinite(_number("partial_eta_squared", partial_eta_squared)) and 0 <= partial_eta_squared < 1):
         raise ValueError(f"partial_eta_squared must lie in [0, 1), got {partial_eta_squared!r}")
     return partial_eta_squared / (1.0 - partial_eta_squared)
 
 
 def _epsilon(epsilon, m):
-    if not (np.isfinite(epsilon) and 1.0 / (m - 1) - 1e-12 <= epsilon <= 1):
+    if not (np.isfinite(_number("epsilon", epsilon)) and 1.0 / (m - 1) - 1e-12 <= epsilon <= 1):
         raise ValueError(f"epsilon must lie in [1/(m-1), 1] = [{1 / (m - 1):.3g}, 1], got {epsilon!r}")
     return float(epsilon)
 
@@ -70,9 +81,46 @@ def _epsilon(epsilon, m):
 def rm_anova_noncentrality(n, m, f=None, partial_eta_squared=None, rho=None, epsilon=1.0):
     """``(lambda, df1, df2)`` of G*Power's repeated-measures, within-factors F test (module docstring)."""
     n, m = _positive_int("n", n, 2), _positive_int("m", m, 2)
-    fp2 = _effect(f, partial_eta_squared, rho)
+    fp2 = _effect(f, partial_eta_squared, rho, m)
     eps = _epsilon(epsilon, m)
-    return fp2 * n * m * eps, (m - 1) * eps, (n - 1) * (m - 1) * eps
+    lam = fp2 * n * m * eps
+    if not np.isfinite(lam):
+        raise ValueError(f"the noncentrality f_p^2 N m epsilon = {fp2:.3g} x {n} x {m} x {eps:g} is beyond the range of "
+                         "doubles (the power is 1 for any N)")
+    return lam, (m - 1) * eps, (n - 1) * (m - 1) * eps
+
+
+#: from this noncentrality on, scipy's noncentral F series stops converging (wrong by 0.25 at 1e11)
+NC_ASYMPTOTIC = 1e10
+
+
+def noncentral_f_sf(x, dfn, dfd, nc, lower=False):
+    """``P(F' > x)`` (``lower=True``: ``P(F' <= x)``) of the noncentral ``F'(dfn, dfd, nc)``, guarded.
+
+    ``nc = 0`` is the central F (scipy's ``ncf`` returns ``sf = -0.95`` there). From ``nc = 1e10``
+    (:data:`NC_ASYMPTOTIC`) the large-noncentrality limit: the numerator concentrates at its mean,
+    ``F' -> ((nc + dfn) / dfn) / (chi2_dfd / dfd)``, so ``P(F' > x) = P(chi2_dfd < dfd (nc + dfn) / (dfn x))``
+    (within 1e-8 of scipy at 1e10, closer beyond). A value scipy gives outside [0, 1] raises ValueError.
+    """
+    x, dfn, dfd, nc = (_number(k, v) for k, v in (("x", x), ("dfn", dfn), ("dfd", dfd), ("nc", nc)))
+    if not (dfn > 0 and dfd > 0 and np.isfinite(dfn) and np.isfinite(dfd)) or not (nc >= 0) or np.isnan(x):
+        raise ValueError(f"the noncentral F needs positive finite degrees of freedom, nc >= 0 and a number x; got "
+                         f"dfn={dfn!r}, dfd={dfd!r}, nc={nc!r}, x={x!r}")
+    if x <= 0 or x == np.inf:
+        upper = 1.0 if x <= 0 else 0.0
+    elif nc == 0:
+        upper = stats.f.cdf(x, dfn, dfd) if lower else stats.f.sf(x, dfn, dfd)
+        return float(upper)
+    elif nc >= NC_ASYMPTOTIC:
+        threshold = dfd * ((nc + dfn) / dfn) / x
+        return float(stats.chi2.sf(threshold, dfd) if lower else stats.chi2.cdf(threshold, dfd))
+    else:
+        value = float(stats.ncf.cdf(x, dfn, dfd, nc) if lower else stats.ncf.sf(x, dfn, dfd, nc))
+        if not (np.isfinite(value) and -1e-12 <= value <= 1 + 1e-12):
+            raise ValueError(f"the noncentral F(dfn={dfn:g}, dfd={dfd:g}, nc={nc:g}) at x={x:g} is not computable "
+                             f"(scipy gave {value!r})")
+        return float(np.clip(value, 0.0, 1.0))
+    return 1.0 - upper if lower else upper
 
 
 def rm_anova_power(n, m, f=None, partial_eta_squared=None, rho=None, epsilon=1.0, alpha=0.05):
@@ -84,7 +132,7 @@ def rm_anova_power(n, m, f=None, partial_eta_squared=None, rho=None, epsilon=1.0
     alpha = _probability("alpha", alpha)
     lam, df1, df2 = rm_anova_noncentrality(n, m, f, partial_eta_squared, rho, epsilon)
     crit = stats.f.isf(alpha, df1, df2)
-    return float(stats.ncf.sf(crit, df1, df2, lam))
+    return noncentral_f_sf(crit, df1, df2, lam)      # alpha at zero effect
 
 
 def rm_anova_sample_size(power, m, f=None, partial_eta_squared=None, rho=None, epsilon=1.0, alpha=0.05,
@@ -95,7 +143,7 @@ def rm_anova_sample_size(power, m, f=None, partial_eta_squared=None, rho=None, e
     if not power > _probability("alpha", alpha):
         raise ValueError(f"power must exceed alpha, got power={power}, alpha={alpha}")
     kw = dict(f=f, partial_eta_squared=partial_eta_squared, rho=rho, epsilon=epsilon, alpha=alpha)
-    if _effect(f, partial_eta_squared, rho) == 0:
+    if _effect(f, partial_eta_squared, rho, _positive_int("m", m, 2)) == 0:
         raise ValueError("the effect size is zero: no sample size reaches a power above alpha")
     if rm_anova_power(n_max, m, **kw) < power:
         raise ValueError(f"even n_max={n_max} subjects do not reach power {power}")
@@ -160,12 +208,12 @@ def noncentrality_interval(F, df1, df2, confidence=0.95):
     ``lambda_lo`` with ``P(F' <= F | lambda_lo) = 1 - a/2`` and ``lambda_hi`` with ``a/2``
     (``a = 1 - confidence``); an end is 0 where even ``lambda = 0`` makes ``F`` that unlikely."""
     confidence = _probability("confidence", confidence)
-    if not (np.isfinite(F) and F >= 0):
-        raise ValueError(f"F must be a non-negative number, got {F!r}")
+    if not (np.isfinite(_number("F", F)) and F >= 0):
+        raise ValueError(f"F must be a non-negative number (finite), got {F!r}")
     a = 1.0 - confidence
 
     def end(target):
-        g = lambda lam: stats.ncf.cdf(F, df1, df2, lam) - target  # decreases in lambda
+        g = lambda lam: noncentral_f_sf(F, df1, df2, lam, lower=True) - target  # decreases in lambda
         if g(0.0) <= 0:
             return 0.0
         hi = max(10.0, 4 * F * df1)
@@ -187,8 +235,8 @@ def unbiased_noncentrality(F, df1, df2):
 def effect_size_from_f(F, df1, df2, confidence=0.95):
     """What a reported one-way repeated-measures ``F(df1, df2)`` says about the effect (see
     :class:`EffectSizeEstimate`). E.g. the thesis's ``F(2, 20) = 8.72`` (Sec. 5.3.1)."""
-    if not (np.isfinite(F) and F >= 0):
-        raise ValueError(f"F must be a non-negative number, got {F!r}")
+    if not (np.isfinite(_number("F", F)) and F >= 0):
+        raise ValueError(f"F must be a non-negative number (finite), got {F!r}")
     shape = design_from_f_dofs(df1, df2)  # raises for an F that is not one-way repeated measures
     m, n = shape["levels"], shape["subjects"]
     if df2 <= 2:
@@ -206,10 +254,12 @@ def effect_size_from_f(F, df1, df2, confidence=0.95):
 # ------------------------------------------------------------------------------- paired contrasts
 
 def _two_sided_t_power(ncp, df, crit):
+    if ncp == 0:
+        return float(2 * stats.t.sf(crit, df))
     power = stats.nct.sf(crit, df, ncp) + stats.nct.cdf(-crit, df, ncp)
-    if not np.isfinite(power):  # scipy's noncentral t fails far in the tail (large df and ncp): normal limit
-        power = stats.norm.sf(crit - ncp) + stats.norm.cdf(-crit - ncp)
-    return float(power)
+    if not (np.isfinite(power) and 0 <= power <= 1 + 1e-12):  # scipy's noncentral t fails far in the tail
+        power = stats.norm.sf(crit - ncp) + stats.norm.cdf(-crit - ncp)   # (large df and ncp): the normal limit
+    return float(min(power, 1.0))
 
 
 def _dz(dz):
@@ -276,6 +326,8 @@ def dz_from_summary(mean_a, mean_b, mse):
 def wilson_interval(successes, trials, confidence=0.95):
     """Wilson score interval of a binomial proportion (Monte Carlo power estimates)."""
     successes, trials = np.asarray(successes, dtype=float), np.asarray(trials, dtype=float)
+    if not (np.isfinite(successes).all() and np.isfinite(trials).all()):
+        raise ValueError(f"successes and trials must be finite counts, got {successes!r} and {trials!r}")
     if np.any(trials < 1) or np.any(successes < 0) or np.any(successes > trials):
         raise ValueError("need 0 <= successes <= trials and trials >= 1")
     z = stats.norm.isf((1 - _probability("confidence", confidence)) / 2)
@@ -291,6 +343,8 @@ def recommended_n(n_values, power, target):
     n_values, power = np.asarray(n_values), np.asarray(power, dtype=float)
     if n_values.shape != power.shape or n_values.ndim != 1 or len(n_values) == 0:
         raise ValueError("n_values and power must be 1-D and equally long")
+    if not (np.isfinite(power).all() and ((power >= 0) & (power <= 1)).all()):
+        raise ValueError(f"power must hold probabilities in [0, 1], got {power!r}")
     order = np.argsort(n_values)
     n_values, power = n_values[order], power[order]
     below = np.flatnonzero(power < target)
@@ -299,15 +353,19 @@ def recommended_n(n_values, power, target):
     return int(n_values[below[-1] + 1]) if below[-1] + 1 < len(n_values) else None
 
 
-def replication_plan(F, df1, df2, targets=(0.8, 0.9), alpha=0.05, safeguard=0.6):
+def replication_plan(F, df1, df2, targets=(0.8, 0.9), alpha=0.05, safeguard=0.6, epsilon=1.0, n_max=100_000):
     """Analytic sample sizes for replicating a one-way repeated-measures study that reported
     ``F(df1, df2)`` (e.g. the thesis's ``F(2, 20) = 8.72``), one row per effect estimate of
     :func:`effect_size_from_f`: the plain partial eta squared, partial epsilon squared, the
     omega-squared-style and the unbiased-noncentrality (bias-corrected) estimates, the lower end of
     a ``safeguard`` confidence interval (safeguard power analysis, Perugini et al. 2014) and of the
     95% interval. Columns: ``estimate``, ``eta2p``, ``f_p``, the power at the original N, and the
-    N reaching each target (sphericity assumed, epsilon = 1; None where the estimate is 0)."""
+    N reaching each target with sphericity correction ``epsilon`` (a nullable integer: missing where
+    the estimate is 0 or no N up to ``n_max`` reaches the target, "not reached")."""
     est = effect_size_from_f(F, df1, df2)
+    if est.eta2p >= 1 - 1e-12:
+        raise ValueError(f"F({df1}, {df2}) = {F:g}: partial eta squared rounds to 1 (no error variance is left), so "
+                         "every N >= 2 has power 1; there is nothing to plan")
     guard = effect_size_from_f(F, df1, df2, confidence=safeguard)
     estimates = {"plain partial eta squared": est.eta2p, "partial epsilon squared": est.epsilon2p,
                  "partial omega squared (moments)": est.omega2p, "bias-corrected (unbiased lambda)": est.eta2p_unbiased,
@@ -315,10 +373,39 @@ def replication_plan(F, df1, df2, targets=(0.8, 0.9), alpha=0.05, safeguard=0.6)
                  f"lower end of the {est.confidence:.0%} CI": est.eta2p_ci[0]}
     rows = []
     for name, eta in estimates.items():
+        kw = dict(partial_eta_squared=eta, epsilon=epsilon, alpha=alpha)
         row = {"estimate": name, "eta2p": eta, "f_p": float(np.sqrt(eta / (1 - eta))),
-               f"power at N = {est.n}": rm_anova_power(est.n, est.m, partial_eta_squared=eta, alpha=alpha)}
+               f"power at N = {est.n}": rm_anova_power(est.n, est.m, **kw)}
         for t in targets:
-            row[f"N for {t:.0%}"] = (rm_anova_sample_size(t, est.m, partial_eta_squared=eta, alpha=alpha)
-                                     if eta > 0 else None)
+            reached = eta > 0 and rm_anova_power(n_max, est.m, **kw) >= t
+            row[f"N for {t:.0%}"] = rm_anova_sample_size(t, est.m, n_max=n_max, **kw) if reached else None
         rows.append(row)
-    return pd.DataFrame(rows)
+    table = pd.DataFrame(rows)
+    for t in targets:
+        table[f"N for {t:.0%}"] = table[f"N for {t:.0%}"].astype("Int64")
+    return table
+
+
+def gpower_table(m, f, rho=0.5, epsilon=1.0, alpha=0.05, n_values=(), targets=(0.8,), n_max=100_000):
+    """G*Power's "ANOVA: repeated measures, within factors" (one group) as a table: for each ``n`` in
+    ``n_values`` its noncentrality ``lambda``, ``df1``, ``df2``, critical F and power (``kind`` "power at N"),
+    and for each target power the smallest N reaching it (``kind`` "N for target"; ``n`` missing and power
+    NaN where no N up to ``n_max`` reaches it, "not reached")."""
+    rows = []
+    for n in n_values:
+        lam, df1, df2 = rm_anova_noncentrality(n, m, f=f, rho=rho, epsilon=epsilon)
+        rows.append({"kind": "power at N", "target": None, "n": int(n), "lambda": lam, "df1": df1, "df2": df2,
+                     "F_crit": float(stats.f.isf(_probability("alpha", alpha), df1, df2)),
+                     "power": rm_anova_power(n, m, f=f, rho=rho, epsilon=epsilon, alpha=alpha)})
+    for t in targets:
+        t = _probability("power", t)
+        kw = dict(f=f, rho=rho, epsilon=epsilon, alpha=alpha)
+        reached = _effect(f, None, rho, m) > 0 and t > alpha and rm_anova_power(n_max, m, **kw) >= t
+        n = rm_anova_sample_size(t, m, n_max=n_max, **kw) if reached else None
+        lam, df1, df2 = rm_anova_noncentrality(n or 2, m, f=f, rho=rho, epsilon=epsilon)
+        rows.append({"kind": "N for target", "target": t, "n": n, "lambda": lam if n else None, "df1": df1,
+                     "df2": df2 if n else None, "F_crit": float(stats.f.isf(alpha, df1, df2)) if n else None,
+                     "power": rm_anova_power(n, m, **kw) if n else None})
+    table = pd.DataFrame(rows, columns=["kind", "target", "n", "lambda", "df1", "df2", "F_crit", "power"])
+    table["n"] = table["n"].astype("Int64")
+    return table

@@ -68,6 +68,19 @@ def recover_from_summary(means, F, df_num, df_den):
     return {"n": n, "mse": mse, "p": f_p_value(F, df_num, df_den), "tukey": tukey_from_summary(means, mse, n)}
 
 
+def _level_means(means):
+    try:
+        means = {level: float(m) for level, m in dict(means).items()}
+    except (TypeError, ValueError):
+        raise ValueError(f"means must map each level to a number, got {means!r}") from None
+    if len(means) < 2:
+        raise ValueError(f"means needs at least 2 levels, got {len(means)}")
+    bad = [level for level, m in means.items() if not np.isfinite(m)]
+    if bad:
+        raise ValueError(f"means must be finite numbers; level(s) {bad} are not")
+    return means
+
+
 def tukey_from_summary(means, mse, n):
     """Tukey HSD p-values for all pairs from level means, a repeated-measures MSE and n subjects.
 
@@ -75,25 +88,26 @@ def tukey_from_summary(means, mse, n):
     k = len(means) and (k-1)(n-1) degrees of freedom. Returns a DataFrame with
     columns A, B, mean_A, mean_B, diff, q, p.
     """
-    try:
-        means = {level: float(m) for level, m in dict(means).items()}
-    except (TypeError, ValueError):
-        raise ValueError(f"means must map each level to a number, got {means!r}") from None
-    k = len(means)
-    if k < 2:
-        raise ValueError(f"means needs at least 2 levels, got {k}")
-    bad = [level for level, m in means.items() if not np.isfinite(m)]
-    if bad:
-        raise ValueError(f"means must be finite numbers; level(s) {bad} are not")
+    means = _level_means(means)
     if isinstance(mse, bool) or not isinstance(mse, (int, float, np.number)) or not (np.isfinite(mse) and mse > 0):
         raise ValueError(f"mse must be a positive finite number, got {mse!r}")
+    return tukey_from_root_mse(means, float(np.sqrt(mse)), n)
+
+
+def tukey_from_root_mse(means, root_mse, n):
+    """:func:`tukey_from_summary` from the error term's square root ``sqrt(MSE)`` (representable where MSE
+    itself under- or overflows: data in units of 1e-170 or 1e170)."""
+    means = _level_means(means)
+    k = len(means)
+    if not (np.isfinite(root_mse) and root_mse > 0):
+        raise ValueError(f"root_mse must be a positive finite number, got {root_mse!r}")
     if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and n >= 2):
         raise ValueError(f"n must be an integer >= 2 (subjects), got {n!r}")
     df = (k - 1) * (n - 1)
     rows = []
     for a, b in combinations(means, 2):
         diff = means[a] - means[b]
-        q = abs(diff) / np.sqrt(mse / n)
+        q = abs(diff) / root_mse * np.sqrt(n)
         rows.append((a, b, means[a], means[b], diff, q, float(stats.studentized_range.sf(q, k, df))))
     return pd.DataFrame(rows, columns=["A", "B", "mean_A", "mean_B", "diff", "q", "p"])
 

@@ -32,9 +32,11 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .cells import cell_table
 from .data import LIKERT_RANGE
 from .errors import DegenerateDataError
-from .published import design_from_f_dofs, f_p_value, recover_from_summary, tukey_from_summary  # noqa: F401
+from .published import (design_from_f_dofs, f_p_value, recover_from_summary, tukey_from_root_mse,  # noqa: F401
+                        tukey_from_summary)
 
 _RELATIVE_ZERO = 1e-13
 
@@ -46,6 +48,19 @@ def _negligible(sum_of_squares, values):
     return sum_of_squares <= v.size * (_RELATIVE_ZERO * scale) ** 2
 
 
+def _ldexp_quiet(x, e):
+    """``x 2^e``, inf or 0 without a warning where that is beyond the range of doubles (reported as such)."""
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(x, e)
+
+
+def _exponent(values):
+    """``e`` with ``max |values| 2^-e`` in [0.5, 1) (0 for all-zero values): dividing by ``2^e`` is exact, and
+    squares of the scaled values neither underflow nor overflow, whatever the data's units (1e-170 or 1e170)."""
+    top = float(np.max(np.abs(values)))
+    return int(np.frexp(top)[1]) if top > 0 else 0
+
+
 @dataclass(frozen=True, repr=False)
 class RMAnova:
     """Result of :func:`rm_anova`.
@@ -53,7 +68,11 @@ class RMAnova:
     ``F`` with ``df1 = k - 1`` and ``df2 = (k - 1)(n - 1)`` degrees of freedom, its ``p``, the
     repeated-measures error term ``mse``, the Greenhouse-Geisser ``eps`` and corrected ``p_gg``;
     ``levels``, their ``means``, ``n_subjects``, and ``cells`` (the subject x level table that was
-    analysed). ``to_dict()`` gives the numbers as plain JSON-ready values.
+    analysed). The sums of squares ``ss_effect``, ``ss_error`` and ``ss_subjects`` (between subjects),
+    the mean squares ``ms_effect`` and ``ms_error`` (= ``mse``), the partial eta squared
+    ``SS_effect / (SS_effect + SS_error)`` and the generalized eta squared
+    ``SS_effect / (SS_effect + SS_subjects + SS_error)`` (Olejnik and Algina 2003; Bakeman 2005) are
+    those of pingouin's ``rm_anova``. ``to_dict()`` gives the numbers as plain JSON-ready values.
     """
     F: float
     df1: int
@@ -71,6 +90,25 @@ class RMAnova:
     subject: str = "subject"
     ss_effect: float = 0.0
     ss_error: float = 0.0
+    ss_subjects: float = 0.0
+    eta2p: float = 0.0
+    eta2g: float = 0.0
+    root_mse: float = 0.0
+
+    @property
+    def ms_effect(self):
+        return self.ss_effect / self.df1
+
+    @property
+    def ms_error(self):
+        return self.mse
+
+    def standard_errors(self):
+        """The standard error of each level's mean over subjects (``sd / sqrt(n)``), computed in scaled units."""
+        y = self.cells.to_numpy(dtype=float)
+        e = _exponent(y)
+        sd = np.ldexp(np.ldexp(y, -e).std(axis=0, ddof=1), e)
+        return {level: float(v) for level, v in zip(self.levels, sd / np.sqrt(len(y)))}
 
     # the names of earlier versions (statsmodels' words)
     @property
@@ -86,12 +124,16 @@ class RMAnova:
         return self.eps
 
     def to_dict(self):
-        """The result as plain values: ``F, df1, df2, p, eps, p_gg, mse, n, levels, means, dv, within, subject``."""
+        """The result as plain values: ``F, df1, df2, p, eps, p_gg, mse, n, levels, means, dv, within, subject``,
+        the sums and mean squares and both eta squared."""
         return {"dv": str(self.dv), "within": str(self.within), "subject": str(self.subject),
                 "n": int(self.n_subjects), "levels": [str(level) for level in self.levels],
                 "means": {str(level): float(m) for level, m in self.means.items()},
                 "F": float(self.F), "df1": int(self.df1), "df2": int(self.df2), "p": float(self.p),
-                "eps": float(self.eps), "p_gg": float(self.p_gg), "mse": float(self.mse)}
+                "eps": float(self.eps), "p_gg": float(self.p_gg), "mse": float(self.mse),
+                "ss_effect": float(self.ss_effect), "ss_error": float(self.ss_error),
+                "ss_subjects": float(self.ss_subjects), "ms_effect": float(self.ms_effect),
+                "eta2p": float(self.eta2p), "eta2g": float(self.eta2g)}
 
     def __repr__(self):
         means = ", ".join(f"{level}={m:.4g}" for level, m in self.means.items())
@@ -100,96 +142,28 @@ class RMAnova:
                 f"means {means})")
 
 
-def _select_measure(data, dv):
-    """Tidy trial tables (``measure`` and ``value`` columns): ``dv`` may name a measure."""
-    if isinstance(data, pd.DataFrame) and isinstance(dv, str) and dv not in data.columns \
-            and {"measure", "value"} <= set(data.columns) and (data["measure"] == dv).any():
-        return data.loc[data["measure"] == dv].rename(columns={"value": dv})
-    return data
-
-
-def _column_names(data, dv, within, subject):
-    if not isinstance(data, pd.DataFrame):
-        raise ValueError(f"data must be a pandas DataFrame, got {type(data).__name__}")
-    names = {"dv": dv, "within": within, "subject": subject}
-    for arg, name in names.items():
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"{arg} must name a column (a non-empty string), got {name!r}")
-    if len(set(names.values())) < 3:
-        raise ValueError(f"dv, within and subject must be three different columns, got {dv!r}, {within!r}, {subject!r}")
-    missing = [c for c in names.values() if c not in data.columns]
-    if missing:
-        raise ValueError(f"data is missing columns {missing} (it has {list(data.columns)})")
-    if len(data) == 0:
-        raise ValueError("data has no rows")
-
-
-def cell_table(data, dv, within, subject, aggregate=None, levels=None):
-    """Subject x level table of ``dv`` (long data: one row per observation) after the checks a
-    repeated-measures analysis needs.
-
-    ``within`` is the column of the repeated factor (e.g. the treatment), ``subject`` the column of
-    participant ids. Raises ValueError naming the column and row for NaN, non-numeric or infinite
-    values, for several rows in a cell unless ``aggregate='mean'`` averages them, for a subject
-    missing a level (unbalanced design), and for fewer than 2 subjects or levels. ``levels`` picks
-    and orders the levels (default: all, sorted); rows of other levels are an error. In a tidy
-    table with ``measure`` and ``value`` columns (:mod:`mutual.study.data`), ``dv`` may name a
-    measure (e.g. ``"false_positives"``): its rows are analysed.
-    """
-    data = _select_measure(data, dv)
-    _column_names(data, dv, within, subject)
-    for col in (subject, within, dv):
-        bad = data[col].isna().to_numpy()
-        if bad.any():
-            raise ValueError(f"column {col!r} has a missing value (NaN) in row {data.index[bad.argmax()]!r}")
-    values = pd.to_numeric(data[dv], errors="coerce")
-    bad = values.isna().to_numpy()
-    if bad.any():
-        i = bad.argmax()
-        raise ValueError(f"column {dv!r} must be numeric: row {data.index[i]!r} holds {data[dv].iloc[i]!r}")
-    bad = ~np.isfinite(values.to_numpy(dtype=float))
-    if bad.any():
-        raise ValueError(f"column {dv!r} must hold finite numbers: row {data.index[bad.argmax()]!r} holds "
-                         f"{values.iloc[bad.argmax()]!r}")
-    if aggregate not in (None, "mean"):
-        raise ValueError(f"aggregate must be None or 'mean', got {aggregate!r}")
-    d = data[[subject, within]].assign(**{dv: values.astype(float)})
-    if levels is not None:
-        if isinstance(levels, str) or not hasattr(levels, "__iter__"):
-            raise ValueError(f"levels must be a list of the levels of {within!r}, got {levels!r}")
-        levels = list(levels)
-        if len(set(levels)) != len(levels):
-            raise ValueError(f"levels must not repeat a level, got {levels}")
-        unknown = sorted(map(str, set(d[within]) - set(levels)))
-        if unknown:
-            raise ValueError(f"column {within!r} has level(s) {unknown} not among levels={levels}; select the rows first")
-        absent = [level for level in levels if level not in set(d[within])]
-        if absent:
-            raise ValueError(f"level(s) {absent} of levels have no rows in column {within!r}")
-    sizes = d.groupby([subject, within]).size()
-    if aggregate is None and (sizes > 1).any():
-        cell = sizes[sizes > 1].index[0]
-        raise ValueError(f"several rows for ({subject}, {within}) = {cell}; pass aggregate='mean' to average them")
-    wide = d.groupby([subject, within])[dv].mean().unstack(within)
-    wide = wide.reindex(columns=levels) if levels is not None else wide.reindex(columns=sorted(wide.columns))
-    if wide.isna().any().any():
-        holes = wide.isna()
-        who = list(wide.index[holes.any(axis=1)])
-        raise ValueError(f"unbalanced design: subject(s) {who[:5]}{' ...' if len(who) > 5 else ''} miss level(s) "
-                         f"{list(wide.columns[holes.any(axis=0)])} of {within!r}; every subject needs every level")
-    if wide.shape[0] < 2 or wide.shape[1] < 2:
-        raise ValueError(f"need at least 2 subjects and 2 levels of {within!r}, got {wide.shape[0]} subject(s) and "
-                         f"{wide.shape[1]} level(s)")
-    return wide
+def _distinct_levels(columns):
+    """Refuse a wide table whose level columns repeat a name (a pair would be tested twice, or with itself)."""
+    from ..csvfile import check_names
+    seen = set()
+    for name in columns:
+        if name in seen:
+            raise ValueError(f"cells: the level column {name!r} appears twice; each level needs one column")
+        seen.add(name)
+    check_names(list(columns), "levels", "cells", row=lambda i: f"column {i + 1}")
 
 
 def greenhouse_geisser_epsilon(cells):
     """Greenhouse-Geisser epsilon of a subject x level table, from its double-centred covariance S:
     ``tr(S)^2 / ((k-1) sum S_ij^2)``, in ``[1/(k-1), 1]``; 1 when S is zero."""
+    if isinstance(cells, pd.DataFrame):
+        _distinct_levels(cells.columns)
     y = np.asarray(cells, dtype=float)
     if y.ndim != 2 or y.shape[0] < 2 or y.shape[1] < 2 or not np.isfinite(y).all():
         raise ValueError(f"cells must be a finite subject x level table with >= 2 rows and columns, got shape {y.shape}")
     k = y.shape[1]
+    y = y - y.mean(axis=0)
+    y = np.ldexp(y, -_exponent(y))        # epsilon is scale-free: the squares of S neither underflow nor overflow
     c = np.eye(k) - 1.0 / k
     sdc = c @ np.cov(y, rowvar=False) @ c
     denom = (k - 1) * np.sum(sdc ** 2)
@@ -199,15 +173,18 @@ def greenhouse_geisser_epsilon(cells):
 
 
 def _anova_of_cells(wide, dv, within, subject):
-    y = wide.to_numpy(dtype=float)
-    n, k = y.shape
+    raw = wide.to_numpy(dtype=float)
+    n, k = raw.shape
+    e = _exponent(raw)
+    y = np.ldexp(raw, -e)                 # exact; sums of squares in these units, reported in the data's
     grand = y.mean()
     row, col = y.mean(axis=1, keepdims=True), y.mean(axis=0, keepdims=True)
     ss_within = float(np.sum((y - row) ** 2))
     ss_effect = float(n * np.sum((col - grand) ** 2))
     ss_error = float(np.sum((y - row - col + grand) ** 2))
+    ss_subjects = float(k * np.sum((row - grand) ** 2))
     if _negligible(ss_within, y):
-        what = f"every value is {y.flat[0]:g}" if np.all(y == y.flat[0]) else \
+        what = f"every value is {raw.flat[0]:g}" if np.all(raw == raw.flat[0]) else \
             f"every subject has one value at every level of {within!r}"
         raise DegenerateDataError(f"{dv!r} does not vary within subjects ({what}): the repeated-measures F is 0/0, "
                                   "so there is nothing to test")
@@ -218,13 +195,16 @@ def _anova_of_cells(wide, dv, within, subject):
     if _negligible(ss_effect, y):
         ss_effect = 0.0
     df1, df2 = k - 1, (k - 1) * (n - 1)
-    mse = ss_error / df2
-    F = (ss_effect / df1) / mse
+    F = (ss_effect / df1) / (ss_error / df2)
     eps = greenhouse_geisser_epsilon(y)
-    return RMAnova(F=float(F), df1=df1, df2=df2, p=float(stats.f.sf(F, df1, df2)), mse=float(mse), eps=eps,
-                   p_gg=float(stats.f.sf(F, eps * df1, eps * df2)), n_subjects=n, levels=tuple(wide.columns),
-                   means={c: float(m) for c, m in zip(wide.columns, col.ravel())}, cells=wide, dv=dv, within=within,
-                   subject=subject, ss_effect=ss_effect, ss_error=ss_error)
+    unscaled = lambda ss: float(_ldexp_quiet(ss, 2 * e))
+    return RMAnova(F=float(F), df1=df1, df2=df2, p=float(stats.f.sf(F, df1, df2)), mse=unscaled(ss_error / df2),
+                   eps=eps, p_gg=float(stats.f.sf(F, eps * df1, eps * df2)), n_subjects=n, levels=tuple(wide.columns),
+                   means={c: float(np.ldexp(m, e)) for c, m in zip(wide.columns, col.ravel())}, cells=wide, dv=dv,
+                   within=within, subject=subject, ss_effect=unscaled(ss_effect), ss_error=unscaled(ss_error),
+                   ss_subjects=unscaled(ss_subjects), eta2p=ss_effect / (ss_effect + ss_error),
+                   eta2g=ss_effect / (ss_effect + ss_subjects + ss_error),
+                   root_mse=float(np.ldexp(np.sqrt(ss_error / df2), e)))
 
 
 def rm_anova(data, dv, within, subject, aggregate=None, levels=None):
@@ -255,6 +235,8 @@ def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=N
     ``rm_anova(anova, dv, within, subject, ...)`` when given long data). Columns A, B, mean_A,
     mean_B, diff, q, p."""
     res = _anova_from(anova, dv, within, subject, aggregate, levels)
+    if res.root_mse > 0:                  # the error term's root, exact at any scale (mse may underflow)
+        return tukey_from_root_mse(res.means, res.root_mse, res.n_subjects)
     return tukey_from_summary(res.means, res.mse, res.n_subjects)
 
 
@@ -275,6 +257,7 @@ def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, lev
             raise ValueError(f"cells must be a subject x level DataFrame, an RMAnova or long data, got "
                              f"{type(cells).__name__}")
         wide = cells
+    _distinct_levels(wide.columns)
     try:
         y = wide.to_numpy(dtype=float)
     except (TypeError, ValueError):
@@ -284,15 +267,17 @@ def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, lev
     if not np.isfinite(y).all():
         raise ValueError("cells must be a complete table of finite numbers (no NaN: every subject needs every level)")
     rows = []
+    e = _exponent(y)
+    z = np.ldexp(y, -e)                   # t is scale-free; the squares stay representable (1e-170 or 1e170)
     for (i, a), (j, b) in combinations(enumerate(wide.columns), 2):
-        d = y[:, i] - y[:, j]
-        if _negligible(float(np.sum((d - d.mean()) ** 2)), np.concatenate([y[:, i], y[:, j]])):
-            what = "identical for every subject" if _negligible(float(np.sum(d ** 2)), y[:, [i, j]]) else \
-                f"the same for every subject ({d[0]:g})"
+        d = z[:, i] - z[:, j]
+        if _negligible(float(np.sum((d - d.mean()) ** 2)), np.concatenate([z[:, i], z[:, j]])):
+            what = "identical for every subject" if _negligible(float(np.sum(d ** 2)), z[:, [i, j]]) else \
+                f"the same for every subject ({np.ldexp(d[0], e):g})"
             raise DegenerateDataError(f"levels {a!r} and {b!r}: the paired differences are {what}, so the paired t "
                                       "statistic is undefined (zero variance)")
-        res = stats.ttest_rel(y[:, i], y[:, j])
-        rows.append((a, b, float(d.mean()), float(res.statistic), int(res.df), float(res.pvalue)))
+        res = stats.ttest_rel(z[:, i], z[:, j])
+        rows.append((a, b, float(np.ldexp(d.mean(), e)), float(res.statistic), int(res.df), float(res.pvalue)))
     out = pd.DataFrame(rows, columns=["A", "B", "mean_diff", "t", "df", "p"])
     out["p_holm"] = holm(out["p"].to_numpy())
     return out

@@ -9,8 +9,9 @@
 * or ``scheduler="inline"``: in this process, without Dask (a reference and for debugging).
 
 Large read-only inputs (the value functions) are sent once to every worker (``shared``) and stay in
-its memory. Each task's result is cached by the client in a folder keyed by the task's parameters
-and a code version (atomic writes), so an interrupted sweep resumes where it stopped. A task's
+its memory. Each task's result (a table) is cached by the client as JSON in a folder keyed by the
+task's parameters and a code version (atomic writes; :class:`TaskCache`: nothing in it can run code
+when loaded), so an interrupted sweep resumes where it stopped. A task's
 result depends only on its parameters (its seed is derived from them), so results are identical
 whatever the number of workers or the order they finish in. Progress is shown with tqdm
 (silenced by ``TQDM_DISABLE=1``).
@@ -20,8 +21,8 @@ import hashlib
 import json
 import logging
 import os
-import pickle
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +30,7 @@ from pathlib import Path
 from tqdm.auto import tqdm
 
 from ..atomic import atomic_path
-from ..cache import cache_dir
+from ..cache import CacheWarning, cache_folder, unusable, write_entry
 
 SCHEDULER_ENV = "MUTUAL_DASK_SCHEDULER"
 INLINE = "inline"
@@ -72,15 +73,30 @@ def dask_client(scheduler=None, workers=None, timeout=30):
         cluster.close()
 
 
+CACHE_FORMAT = 1
+_COLUMN_TYPES = {"float64": (float, int), "int64": (int,), "bool": (bool,), "object": (str, type(None)),
+                 "str": (str, type(None))}
+
+
 class TaskCache:
-    """Results of finished tasks in ``folder`` (default ``<cache dir>/power``), one pickle per task,
-    named by the hash of the task's parameters and ``version`` (the code that computes them)."""
+    """Results of finished tasks in ``folder`` (default ``<cache dir>/power``), one JSON file per task,
+    named by the hash of the task's parameters and ``version`` (the code that computes them).
+
+    A result is a pandas DataFrame whose columns hold floats, whole numbers, booleans or text (None
+    allowed); numbers are written exactly (JSON's shortest round-trip form). JSON cannot run code when
+    it is read, and :meth:`get` checks what it reads: the format, the task's key, the column names and
+    every value's type. A file that does not verify is deleted with a :class:`mutual.cache.CacheWarning`
+    and the task recomputed; a folder found where a file should be is removed when the result is written
+    (the cache heals). A cache folder that cannot be created or written turns the cache off for the
+    rest of the sweep with one warning (:mod:`mutual.cache`); the sweep goes on.
+    """
 
     def __init__(self, version, folder=None):
         if not isinstance(version, str) or not version:
             raise ValueError(f"version must be a non-empty string, got {version!r}")
         self.version = version
-        self.folder = Path(folder) if folder is not None else cache_dir() / "power"
+        self.folder = Path(folder) if folder is not None else cache_folder("power")
+        self.disabled = self.folder is None
 
     def __repr__(self):
         return f"TaskCache({str(self.folder)!r}, version={self.version!r})"
@@ -90,23 +106,101 @@ class TaskCache:
         return hashlib.sha256(text.encode()).hexdigest()[:32]
 
     def path(self, params):
-        return self.folder / f"{self.key(params)}.pkl"
+        return self.folder / f"{self.key(params)}.json"
 
     def get(self, params):
-        """The cached result, or None (also for an unreadable file, which is then recomputed)."""
-        path = self.path(params)
+        """The cached result, or None: absent, a folder in its place, or not verifying (then deleted)."""
+        if self.disabled:
+            return None
+        path, key = self.path(params), self.key(params)
         try:
-            with open(path, "rb") as fh:
-                return pickle.load(fh)
-        except FileNotFoundError:
+            text = path.read_text(encoding="utf-8")
+        except (FileNotFoundError, IsADirectoryError, NotADirectoryError):
             return None
-        except (pickle.UnpicklingError, EOFError, AttributeError, ValueError):
+        except PermissionError as err:
+            self.disabled = True
+            unusable(self.folder, err)
             return None
+        except (OSError, UnicodeDecodeError) as err:
+            return self._heal(path, f"unreadable ({type(err).__name__})")
+        try:
+            return _frame_from(json.loads(text), key)
+        except (ValueError, TypeError, KeyError, AttributeError) as err:
+            return self._heal(path, str(err))
 
     def put(self, params, result):
-        with atomic_path(self.path(params)) as tmp:
-            with open(tmp, "wb") as fh:
-                pickle.dump(result, fh, protocol=pickle.HIGHEST_PROTOCOL)
+        """Store ``result`` (a DataFrame, see the class docstring); a disk that refuses turns the cache off."""
+        if self.disabled:
+            return
+        text = json.dumps(_frame_to(result, self.key(params), self.version, params), allow_nan=True)
+        if write_entry(self.path(params), lambda tmp: tmp.write_text(text, encoding="utf-8")) is None:
+            self.disabled = True
+
+    def _heal(self, path, reason):
+        warnings.warn(f"power cache file {path} does not verify: {reason}; recomputing it", CacheWarning,
+                      stacklevel=3)
+        try:
+            path.unlink()
+        except OSError:
+            pass
+        return None
+
+
+def _frame_to(frame, key, version, params):
+    """The JSON-able form of a DataFrame of float, int64, bool and text columns."""
+    import pandas as pd
+    if not isinstance(frame, pd.DataFrame):
+        raise ValueError(f"TaskCache stores pandas DataFrames, got {type(frame).__name__}")
+    columns, dtypes, data = [str(c) for c in frame.columns], [], []
+    if len(set(columns)) != len(columns) or list(frame.columns) != columns:
+        raise ValueError(f"TaskCache needs distinct text column names, got {list(frame.columns)}")
+    for name in columns:
+        column = frame[name]
+        kind = str(column.dtype) if str(column.dtype) in _COLUMN_TYPES else None
+        kind = "object" if kind is None and column.dtype == object else kind
+        values = column.tolist()
+        if kind == "str":                  # pandas' text dtype: a missing value is NaN
+            values = [None if isinstance(v, float) else v for v in values]
+        if kind is None or (kind in ("object", "str") and not all(isinstance(v, (str, type(None))) for v in values)):
+            raise ValueError(f"TaskCache stores float64, int64, bool and text columns; {name!r} is {column.dtype}")
+        data.append([float(v) if kind == "float64" else int(v) if kind == "int64" else bool(v) if kind == "bool"
+                     else v for v in values])
+        dtypes.append(kind)
+    return {"format": CACHE_FORMAT, "key": key, "version": version, "params": params, "columns": columns,
+            "dtypes": dtypes, "data": data}
+
+
+def _frame_from(stored, key):
+    """The DataFrame of a stored task, after checking every field and value type; ValueError says what is wrong."""
+    import numpy as np
+    import pandas as pd
+    if not isinstance(stored, dict) or stored.get("format") != CACHE_FORMAT:
+        raise ValueError(f"not a task cache file of format {CACHE_FORMAT}")
+    if stored.get("key") != key:
+        raise ValueError(f"it holds another task (key {stored.get('key')!r}, expected {key})")
+    columns, dtypes, data = stored["columns"], stored["dtypes"], stored["data"]
+    if not (isinstance(columns, list) and isinstance(dtypes, list) and isinstance(data, list)
+            and len(columns) == len(dtypes) == len(data) and all(isinstance(c, str) for c in columns)
+            and len(set(columns)) == len(columns)):
+        raise ValueError("columns, dtypes and data do not match")
+    if len({len(values) if isinstance(values, list) else -1 for values in data}) > 1:
+        raise ValueError("columns of different lengths")
+    out = {}
+    for name, kind, values in zip(columns, dtypes, data):
+        allowed = _COLUMN_TYPES.get(kind)
+        if not isinstance(values, list) or allowed is None:
+            raise ValueError(f"column {name!r}: unknown type {kind!r}")
+        if not all(isinstance(v, allowed) and (kind in ("bool", "object") or not isinstance(v, bool)) for v in values):
+            raise ValueError(f"column {name!r}: a value is not of type {kind}")
+        if kind == "float64":
+            out[name] = np.array(values, dtype=float)
+        elif kind == "int64" and not all(abs(v) < 2 ** 63 for v in values):
+            raise ValueError(f"column {name!r}: a whole number beyond 64 bits")
+        elif kind == "str":
+            out[name] = pd.array(values, dtype="str")
+        else:
+            out[name] = pd.Series(values, dtype={"int64": np.int64, "bool": bool}.get(kind, object))
+    return pd.DataFrame(out, columns=columns)
 
 
 @dataclass

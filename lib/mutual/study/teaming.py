@@ -20,8 +20,7 @@ import pandas as pd
 from ..supervision.dubins import TRUE_W_MAX, dubins_step, wrap_angle
 from ..supervision.reachability import ValueFunction
 from ..supervision.supervisor import NoisySupervisor
-
-OBSTACLE_RADIUS = 1.0
+from .design import OBSTACLE_RADIUS
 
 
 @dataclass(frozen=True, repr=False)

@@ -8,7 +8,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..belief import check_prior, laplace_gaussian, lq_gaussian, posterior_over_time
-from ..belief import trailing_logdets
 from ..legible.problem import single_integrator
 from . import safety as es
 from .mpc import continuation_costs
@@ -26,8 +25,10 @@ def continuation_loglik(task, weights, us, optimum, times=None):
     :mod:`.mpc`'s frozen stages); ``J* = V_0(x_0)``: the hypothesis's optimal cost;
     ``Hess``: the Hessian of ``H_J`` in the controls at the optimum ``optimum`` (an ILQRResult),
     whose Schur complement onto the first ``t`` steps measures the volume of near-optimal
-    continuations. For linear dynamics and quadratic costs every term is exact (the integral of
-    the Gaussian over the unseen controls), so this equals the Gaussian marginal of
+    continuations (its log-determinant is a running sum of the DDP backward pass's
+    ``log det Q_uu``, :meth:`mutual.motion.chain.ChainGaussian.prefix_logdets`). For linear
+    dynamics and quadratic costs every term is exact (the integral of the Gaussian over the
+    unseen controls), so this equals the Gaussian marginal of
     :func:`mutual.motion.belief.gaussian_prefix_loglik`; it is Dragan and Srinivasa's ``exp(-C(xi_{S->Q}) - V(Q)) /
     exp(-V(S))`` with that volume correction. Raises ValueError if a continuation does not converge.
     """
@@ -40,16 +41,14 @@ def continuation_loglik(task, weights, us, optimum, times=None):
             or times.min() < 0 or times.max() > N:
         raise ValueError(f"times must be integers in [0, {N}], got {times!r}")
     dyn, run, term, x0, params = es.problem(task, weights)
-    _, H = laplace_gaussian(dyn, run, term, x0, optimum.us, params)
-    logdet = trailing_logdets(H)
+    schur = laplace_gaussian(dyn, run, term, x0, optimum.us, params).prefix_logdets()
     xs = es.rollout(task, us)
     with jax.enable_x64(True):
         stage = np.asarray(jax.vmap(run, in_axes=(0, 0, None))(jnp.asarray(xs[:-1]), jnp.asarray(us), params))
     prefix = np.concatenate([[0.0], np.cumsum(stage)])
     # V_0(x_0) by the same search as every V_t, so that nothing seen gives log-likelihood 0
     to_go = continuation_costs(task, weights, xs[np.r_[0, times]], np.r_[0, times], (optimum.us, us))
-    full = logdet[0] - logdet[times * m]
-    return -prefix[times] - to_go[1:] + to_go[0] + 0.5 * full - 0.5 * times * m * np.log(2 * np.pi)
+    return -prefix[times] - to_go[1:] + to_go[0] + 0.5 * schur[times] - 0.5 * times * m * np.log(2 * np.pi)
 
 
 def belief_over_time(task, w0, w1, us, optima, prior=0.5, times=None):

@@ -15,9 +15,16 @@ from .objective import (distractor_mixture, geometric_alpha_schedule, legible_co
                         linear_alpha_schedule, receding_horizon, replan_gains)
 from .problem import (LinearDynamics, QuadraticCost, double_integrator, random_lq_hypotheses, reaching_cost,
                       single_integrator, solve)
-from .qp import multi_distractor_qp, receding_horizon_qp
 
 __all__ = ["LQSolution", "LinearDynamics", "QuadraticCost", "distractor_mixture", "double_integrator",
            "geometric_alpha_schedule", "legible_cost", "legible_trajectory", "linear_alpha_schedule",
            "multi_distractor_qp", "random_lq_hypotheses", "reaching_cost", "receding_horizon", "receding_horizon_qp",
            "replan_gains", "single_integrator", "solve", "solve_lq"]
+
+
+def __getattr__(name):
+    """The QP solvers load cvxpy, so :mod:`.qp` is imported on first use (a plain LQ solve needs only NumPy)."""
+    if name in ("multi_distractor_qp", "receding_horizon_qp"):
+        from . import qp
+        return getattr(qp, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

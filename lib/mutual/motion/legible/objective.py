@@ -107,10 +107,13 @@ def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
 
     Replans at steps ``t_i = 0, every, 2 every, ...`` on the remaining horizon
     ``[t_i, N)`` with ``alpha_i = alpha_of_s(t_i / N)`` and follows each plan until the
-    next replanning. The replans' backward Riccati passes share the dynamics and
-    differ only in ``alpha``, so they run together in one batched sweep
-    (:func:`.lqr.riccati_backward`); the closed loop then applies plan ``i``'s
-    feedback on its own steps, which reproduces its open-loop controls exactly.
+    next replanning. A replan's gains at a stage do not depend on where it started (the
+    backward pass runs from ``N``), and the closed loop applies plan ``i``'s feedback on its own
+    steps, which reproduces its open-loop controls exactly. When ``J1`` and ``J0`` share their
+    quadratic part (eq. (6.17)'s reaching costs), every replan's gains follow from the two
+    hypotheses' own (:func:`shared_quadratic_gains`): O(N) for any ``every``; otherwise the replans'
+    backward passes run together in one batched sweep (:func:`.lqr.riccati_backward`), whose size
+    (``N / every`` passes of ``N`` stages) is checked before allocating.
     Returns ``(xs, us, alphas)`` with ``alphas[k]`` the weight in force at step ``k``.
     ``J0`` may be a list of distractors (combined with equal weights, :func:`distractor_mixture`).
     """
@@ -126,20 +129,89 @@ def receding_horizon(dynamics, J1, J0, x0, N, alpha_of_s, every=1):
     x0 = np.asarray(x0, float)
     if x0.shape != (dynamics.n,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"x0 must be a finite vector of length {dynamics.n}, got {x0!r}")
-    starts = np.arange(0, N, every)
-    alphas = np.array([float(alpha_of_s(t / N)) for t in starts])
+    per_step = scheduled_alphas(alpha_of_s, N, every)
+    dyn = dynamics.stages(0, N)
+    n, m = dyn.n, dyn.m
+    if shares_quadratic(J1, J0, N):
+        Ks, ks = shared_quadratic_gains(dynamics, J1, J0, N, 1.0 + per_step, np.ones(N))
+    else:
+        starts = np.arange(0, N, every)
+        need = 8 * len(starts) * (N + 1) * (3 * n * n + 3 * m * m + 2 * n * m + 2 * n + 2 * m)
+        if need > REPLAN_LIMIT_BYTES:
+            raise ValueError(f"receding horizon: {len(starts)} replans (N = {N}, every = {every}) of costs without a "
+                             f"shared quadratic part need one batched sweep of {need / 2 ** 30:.3g} GiB (limit "
+                             f"{REPLAN_LIMIT_BYTES / 2 ** 30:.3g} GiB); replan less often (a larger every)")
+        K, k = replan_gains(dynamics, J1, J0, N, 1.0 + per_step[starts], np.ones(len(starts)), starts)
+        plan = np.arange(N) // every            # which replan is in force at each step
+        Ks, ks = K[plan, np.arange(N)], k[plan, np.arange(N)]
+    xs, us = policy_rollout(dynamics, x0, Ks, ks)
+    return xs, us, per_step
+
+
+def scheduled_alphas(alpha_of_s, N, every):
+    """The weight in force at each step (N,) when replanning at ``t_i = 0, every, ...`` with
+    ``alpha_i = alpha_of_s(t_i / N)`` (eq. (6.16))."""
+    alphas = np.array([float(alpha_of_s(t / N)) for t in range(0, N, every)])
     if not np.all(np.isfinite(alphas)):
         raise ValueError(f"alpha_of_s returned non-finite weights {alphas.tolist()}")
-    K, k = replan_gains(dynamics, J1, J0, N, 1.0 + alphas, np.ones_like(alphas), starts)
+    return alphas[np.arange(N) // every]
+
+
+def policy_rollout(dynamics, x0, K, k):
+    """States (N+1, n) and controls (N, m) of the affine policy ``u_t = K_t x_t + k_t`` from ``x0``."""
+    N = len(k)
     dyn = dynamics.stages(0, N)
     n, m = dyn.n, dyn.m
     A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
-    plan = np.arange(N) // every            # which replan is in force at each step
-    Ks, ks = K[plan, np.arange(N)], k[plan, np.arange(N)]
     xs = np.empty((N + 1, n))
     us = np.empty((N, m))
     x = xs[0] = np.asarray(x0, float)
     for t in range(N):
-        u = us[t] = Ks[t] @ x + ks[t]
+        u = us[t] = K[t] @ x + k[t]
         x = xs[t + 1] = A[t] @ x + B[t] @ u
-    return xs, us, alphas[plan]
+    return xs, us
+
+
+REPLAN_LIMIT_BYTES = 2 * 2 ** 30
+SHARED_RTOL = 1e-13
+
+
+def shares_quadratic(J1, J0, N, rtol=SHARED_RTOL):
+    """Do ``J1`` and ``J0`` have the same quadratic part (``Q``, ``R``, ``QN`` over the first ``N`` stages,
+    to a relative ``rtol``, i.e. rounding)? Then they differ only in their linear terms."""
+    c1, c0 = J1.stages(0, N), J0.stages(0, N)
+    for f in ("Q", "R", "QN"):
+        a, b = np.broadcast_arrays(getattr(c1, f), getattr(c0, f))
+        scale = max(np.abs(a).max(initial=0.0), np.abs(b).max(initial=0.0))
+        if np.abs(a - b).max(initial=0.0) > rtol * scale:
+            return False
+    return True
+
+
+def shared_quadratic_gains(dynamics, J1, J0, N, w1, w0):
+    """Gains ``(K (N, m, n), k (N, m))`` at each stage ``t`` of ``min w1[t] J1 - w0[t] J0`` when ``J1`` and
+    ``J0`` share their quadratic part ``J_q`` (:func:`shares_quadratic`; ``w1 > w0``): the cost's quadratic
+    part is ``(w1 - w0) J_q``, which scales the Riccati matrices and leaves the feedback ``K`` that of
+    ``J1`` alone, and the feedforward is linear in the linear terms, so
+    ``k = (w1 k_1 - w0 k_0) / (w1 - w0)`` from the two hypotheses' own feedforwards ``k_i``: one batched
+    backward pass for any number of weights (every replan of eq. (6.16))."""
+    dyn, c1, c0 = dynamics.stages(0, N), J1.stages(0, N), J0.stages(0, N)
+    n, m = dyn.n, dyn.m
+
+    def both(f, shape):
+        return np.stack([np.broadcast_to(getattr(c, f), shape) for c in (c1, c0)])
+
+    A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
+    K, k, _, _ = riccati_backward(A, B, both("Q", (N, n, n)), both("R", (N, m, m)), both("q", (N, n)),
+                                  both("r", (N, m)), both("QN", (n, n)), both("qN", (n,)))
+    return K[0], mixed_feedforward(k[0], k[1], w1, w0)
+
+
+def mixed_feedforward(k1, k0, w1, w0):
+    """The feedforward ``(w1 k1 - w0 k0) / (w1 - w0)`` (N, m) of ``w1 J1 - w0 J0`` at each step from those of
+    two costs that share their quadratic part (:func:`shared_quadratic_gains`); ``w1``, ``w0`` per step."""
+    w1, w0 = np.broadcast_to(np.asarray(w1, float), (len(k1),)), np.broadcast_to(np.asarray(w0, float), (len(k1),))
+    if not np.all(w1 - w0 > 0):
+        raise ValueError("unbounded LQ problem: the weights give the shared quadratic part a factor w1 - w0 <= 0 "
+                         "(for a legible objective (1+alpha) J1 - J0 this means alpha <= 0)")
+    return (w1[:, None] * k1 - w0[:, None] * k0) / (w1 - w0)[:, None]

@@ -67,9 +67,15 @@ def _blockwise_psd(blocks, tol):
 
 
 def _solve(prob, solver, etas):
-    prob.solve(solver=solver)
+    try:
+        prob.solve(solver=solver)
+    except cp.error.SolverError:
+        raise ValueError(f"the multi-distractor QP for etas={etas.tolist()} defeated the solver {solver} (numerical "
+                         "trouble: an eta at or near the smallest bound any motion meets, or costs of very different "
+                         "scales)") from None
     if prob.status not in ("optimal", "optimal_inaccurate"):
-        raise ValueError(f"the multi-distractor QP is {prob.status} for etas={etas.tolist()}")
+        why = {"infeasible": ": no motion has J1 - J0_i <= eta_i for every distractor"}.get(prob.status, "")
+        raise ValueError(f"the multi-distractor QP is {prob.status} for etas={etas.tolist()}{why}")
 
 
 def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL", tol=1e-9, formulation="sparse"):

@@ -83,8 +83,9 @@ def replan_seconds(N=100, repeats=20, backend="jax", alpha=1.0):
 
 
 def receding_horizon_seconds(N=100, repeats=5, schedule=(0.25, 4.0)):
-    """Time of a whole receding-horizon run replanning at every step (N replans, batched backward
-    sweep, :func:`mutual.motion.legible.objective.receding_horizon`) on the reference problem."""
+    """Time of a whole receding-horizon run replanning at every step (N replans,
+    :func:`mutual.motion.legible.objective.receding_horizon`) on the reference problem, whose
+    hypotheses share their quadratic part: every replan's gains follow from the two hypotheses' own."""
     dyn, J1, J0 = _reference(N)
     alpha = linear_alpha_schedule(*schedule)
     return interleaved_best_times({"rh": lambda: receding_horizon(dyn, J1, J0, np.zeros(2), N, alpha)}, repeats)["rh"]

@@ -1,0 +1,337 @@
+"""``mutual constraints infer-continuous`` and ``mutual constraints simulate`` (issue 21).
+
+``infer-continuous`` reads recorded trajectories of a continuous system and its system file,
+discretizes the dynamics (:mod:`mutual.constraints.continuous`), proposes bounds, obstacles or cells
+as chance constraints and adds them greedily, best F first, until the stop rule fires.
+``simulate`` writes demonstrations to try it with: of a continuous system (by a demonstrator on the
+true dynamics that respects --hidden constraints) or of a gridworld (chapter 3's Boltzmann agent).
+Heavy libraries are imported inside the commands.
+"""
+
+from . import common
+
+DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 5, 0.1, 5
+FAMILIES = ("bound", "disk", "box", "cell")   # mutual.constraints.continuous.candidates.FAMILIES (no numpy here; a test checks)
+
+INFER_DESCRIPTION = f"""\
+Constraints from continuous demonstrations (an extension of chapters 2-3; Section 3.4's next step).
+
+The system file gives the dynamics, a box over the state space cut into cells, a control set, a
+time step and the demonstrator's task (a quadratic reward). The dynamics are discretized into a
+tabular MDP -- Monte Carlo within each cell (Stocking et al. 2021) or barycentric interpolation on a
+Kuhn triangulation (Munos and Moore) -- and the recordings mapped onto it: each state to its cell,
+each step to the nearest control of the set, or, where no control was recorded, to the control
+whose one-step prediction best explains the next state (reported as INFERRED).
+
+Candidates (--families, or [candidates] in the system file): "bound" (every cell edge of every
+coordinate, either side), "disk" and "box" (obstacles in the plane of two coordinates), "cell"
+(one per cell). Each is a chance constraint on the set R it covers: action a is allowed in x only
+if S(x, a, R) <= psi, with the maximum-likelihood psi of Lemma 3.2.1 (--thresholds lemma: the
+lowest psi that keeps every demonstration feasible; eq3.3: the thesis's eq. 3.3). Each round ranks
+them by F = Z_C+ / Z_C0 (Algorithm 4, eq. 2.25), prints the best --top with F and the exact
+log-likelihood gain per demonstration, and adds the smallest F; it stops before a constraint whose
+-log F is below --min-gain (default {DEFAULT_MIN_GAIN} nats per demonstration) or after --rounds.
+
+Discretization runs in this process for small grids and on Dask for large ones (an embedded
+LocalCluster, or --scheduler ADDRESS / $MUTUAL_DASK_SCHEDULER); --inline never uses Dask. The result
+is the same wherever it runs.
+
+TRAJ.csv: demo, t, one column per state coordinate, optionally one per control. SYSTEM.toml: system,
+[parameters], [state], [control], [time], [discretization], [reward], [candidates], [simulate].
+Formats: data/README.md.
+
+writes to --out:  continuous_ranking.csv (every scored candidate in every round: rank, the
+                  constraint in its units, psi, F, -log F, exact gain, chosen),
+                  continuous_chosen.csv (the accepted constraints), continuous_constraints.png
+                  (the demonstrations with the inferred regions, in pairs of coordinates)
+"""
+
+INFER_EXAMPLE = """\
+examples:
+  mutual constraints infer-continuous data/examples/pendulum_trajectories.csv --system data/examples/pendulum.toml
+  mutual constraints simulate --system data/examples/pendulum.toml --out mine/
+  mutual constraints infer-continuous mine/trajectories.csv --system data/examples/pendulum.toml --json
+"""
+
+SIMULATE_DESCRIPTION = """\
+Write demonstrations to try constraint inference on, in the documented formats (data/README.md).
+
+--system SYSTEM.toml: trajectories of the continuous system (trajectories.csv), from the start in
+[simulate] (+- spread), by a demonstrator acting on the TRUE continuous dynamics that never enters a
+--hidden region: "soft", a Boltzmann (maximum-causal-entropy) demonstrator solved on a finer grid
+([simulate] fine_cells), or "mppi", sampled trajectory optimisation. Hidden constraints:
+"NAME <= VALUE", "NAME >= VALUE", "disk X Y R", "box XMIN XMAX YMIN YMAX" (in [candidates] plane).
+
+--world WORLD.toml: demonstrations of chapter 3's gridworld (demonstrations.csv) from its Boltzmann
+agent under --hidden constraints "cell COL ROW" (optionally "psi P", default 0: forbidden) and
+"action NAME" (E, NE, N, NW, W, SW, S, SE).
+"""
+
+SIMULATE_EXAMPLE = """\
+examples:
+  mutual constraints simulate --system data/examples/pendulum.toml --hidden "theta_dot <= 5" --n 20
+  mutual constraints simulate --world data/examples/world.toml --hidden "cell 4 0 psi 0.25" --hidden "action NW"
+"""
+
+
+def register(commands):
+    """Add ``infer-continuous`` and ``simulate`` to the ``mutual constraints`` commands."""
+    import argparse
+    infer = commands.add_parser("infer-continuous", help="constraints from continuous trajectories (extension)",
+                                description=INFER_DESCRIPTION, epilog=INFER_EXAMPLE,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    infer.add_argument("trajectories", metavar="TRAJ.csv", help="the recorded trajectories (format: data/README.md)")
+    infer.add_argument("--system", required=True, metavar="SYSTEM.toml", help="the system, its grid and task")
+    infer.add_argument("--families", metavar="LIST", help="candidate families, comma-separated: bound, disk, box, cell "
+                                                          "(default: [candidates] families, else bound)")
+    infer.add_argument("--rounds", type=int, default=DEFAULT_ROUNDS, help=f"at most this many constraints "
+                                                                          f"(default {DEFAULT_ROUNDS})")
+    infer.add_argument("--min-gain", type=float, default=DEFAULT_MIN_GAIN, metavar="NATS",
+                       help=f"stop before a constraint whose -log F is below NATS per demonstration "
+                            f"(default {DEFAULT_MIN_GAIN})")
+    infer.add_argument("--top", type=int, default=DEFAULT_TOP, help=f"candidates printed per round (default {DEFAULT_TOP})")
+    infer.add_argument("--cells", metavar="N[,N...]", help="cells per coordinate (overrides [state] cells)")
+    infer.add_argument("--scheme", choices=("sample", "barycentric"), help="discretization (overrides the file)")
+    infer.add_argument("--thresholds", choices=("lemma", "eq3.3"), default="lemma",
+                       help="chance thresholds: Lemma 3.2.1 exactly (default) or eq. 3.3")
+    infer.add_argument("--truncate", action="store_true", help="cut demonstrations of different durations to the shortest")
+    dask = infer.add_argument_group("where the discretization runs")
+    dask.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    dask.add_argument("--workers", type=int, help="workers of the embedded LocalCluster (default: one per core)")
+    dask.add_argument("--inline", action="store_true", help="in this process, without Dask")
+    common.add_output_options(infer)
+    infer.set_defaults(handler=run_infer_continuous, prog=infer.prog)
+    simulate = commands.add_parser("simulate", help="write demonstrations of a system or a gridworld to try inference",
+                                   description=SIMULATE_DESCRIPTION, epilog=SIMULATE_EXAMPLE,
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    source = simulate.add_mutually_exclusive_group(required=True)
+    source.add_argument("--system", metavar="SYSTEM.toml", help="a continuous system (writes trajectories.csv)")
+    source.add_argument("--world", metavar="WORLD.toml", help="a gridworld (writes demonstrations.csv)")
+    simulate.add_argument("--hidden", action="append", metavar="TEXT", help="a hidden constraint (repeatable; "
+                                                                           "default: [simulate] hidden)")
+    simulate.add_argument("--n", type=int, help="demonstrations (default: [simulate] n, else 20; gridworld 100)")
+    simulate.add_argument("--seed", type=int, help="random seed (default: [simulate] seed, else 0)")
+    simulate.add_argument("--demonstrator", choices=("soft", "mppi"), help="continuous demonstrator (default: the file's)")
+    simulate.add_argument("--noise", type=float, help="suboptimal demonstrator: chance of a random safe action (soft) "
+                                                      "or control noise as a share of the range (mppi)")
+    simulate.add_argument("--no-controls", action="store_true", help="leave the control columns out (inference then "
+                                                                     "infers the controls)")
+    common.add_output_options(simulate)
+    simulate.set_defaults(handler=run_simulate, prog=simulate.prog)
+
+
+def _check_options(args):
+    import math
+    for name, value, low in (("--rounds", args.rounds, 1), ("--top", args.top, 1)):
+        if value < low:
+            raise common.InputError(f"{name} {value}: must be at least {low}")
+    if not math.isfinite(args.min_gain) or args.min_gain < 0:
+        raise common.InputError(f"--min-gain {args.min_gain}: must be a finite number >= 0")
+    if args.workers is not None and args.workers < 1:
+        raise common.InputError(f"--workers {args.workers}: must be at least 1")
+
+
+def _with_overrides(args, problem, system_path):
+    from ..constraints.continuous.experiments import with_cells
+    if args.cells:
+        try:
+            cells = [int(c) for c in args.cells.split(",")]
+        except ValueError:
+            raise common.InputError(f"--cells {args.cells}: must be integers separated by commas") from None
+        if len(cells) == 1:
+            cells *= problem.grid.ndim
+        if len(cells) != problem.grid.ndim or min(cells) < 2:
+            raise common.InputError(f"--cells {args.cells}: needs one integer >= 2, or one per coordinate "
+                                    f"({problem.grid.ndim} in {system_path})")
+        problem = with_cells(problem, cells)
+    return problem.replace(scheme=args.scheme) if args.scheme else problem
+
+
+def run_infer_continuous(args):
+    _check_options(args)
+    traj_path, system_path = common.existing_file(args.trajectories), common.existing_file(args.system)
+    from ..constraints.continuous import infer, load_system, read_recording
+    from ..constraints.continuous.mapping import check_recording
+    with common.about(system_path):
+        spec = load_system(system_path)
+    problem = _with_overrides(args, spec.problem, system_path)
+    families = [f.strip() for f in args.families.split(",")] if args.families else spec.candidates["families"]
+    unknown = [f for f in families if f not in FAMILIES]
+    if unknown:
+        raise common.InputError(f"--families {args.families}: unknown family {unknown[0]!r}; choose from "
+                                f"{', '.join(FAMILIES)}")
+    system = problem.system
+    with common.about(traj_path):
+        recording = read_recording(traj_path, system.state_names, system.control_names)
+        check_recording(problem, recording, args.truncate)
+    scheduler = "inline" if args.inline else (args.scheduler or "auto")
+    with common.progress(args, total=args.rounds + 2, desc="infer-continuous", unit="stage") as bar:
+        def progress(stage, detail):
+            bar.update(1)
+            bar.set_postfix_str(detail[:60])
+
+        with common.about(traj_path):
+            run = infer(problem, recording, families=families, rounds=args.rounds,
+                        min_gain=args.min_gain, truncate=args.truncate, scheduler=scheduler, workers=args.workers,
+                        progress=progress, thresholds=args.thresholds, plane=spec.candidates["plane"],
+                        every=spec.candidates["every"], radii=spec.candidates["radii"],
+                        half_widths=spec.candidates["half_widths"])
+    _report_inference(args, run, traj_path, system_path)
+
+
+def _report_inference(args, run, traj_path, system_path):
+    from ..constraints.continuous.plots import inference_figure
+    common.use_agg()
+    table = run.ranking()
+    chosen = run.chosen()
+    outputs = {
+        "ranking": common.write_csv(table, common.output_path(args, "continuous_ranking.csv"), float_format="%.8g"),
+        "chosen": common.write_csv(chosen, common.output_path(args, "continuous_chosen.csv"), float_format="%.8g"),
+        "figure": common.save_figure(inference_figure(run), common.output_path(args, "continuous_constraints.png")),
+    }
+    problem, mapped = run.problem, run.mapped
+    stopped = {"rounds": "rounds", "min_gain": "min-gain", "no feasible candidate": "no candidate left"}[run.result.stop]
+    results = {
+        "command": "constraints infer-continuous", "input": str(traj_path), "system": str(system_path),
+        "dynamics": problem.system.spec, "n_demonstrations": mapped.demos.n, "steps": mapped.demos.steps,
+        "dt": problem.dt, "cells": list(problem.grid.shape), "n_states": problem.grid.n_cells,
+        "n_controls": problem.n_actions, "scheme": problem.scheme, "thresholds": args.thresholds,
+        "controls": {"recorded_snapped": mapped.snapped, "inferred": mapped.inferred,
+                     "inferred_mean_miss_cells": mapped.miss, "zero_probability_steps_added": mapped.added},
+        "n_candidates": len(run.candidates), "thresholds_raised_by_lemma": run.candidates.raised,
+        "rounds": args.rounds, "min_gain": args.min_gain, "stopped": stopped,
+        "chosen": chosen.to_dict(orient="records"),
+        "ranking": [table[table["round"] == r].head(args.top).to_dict(orient="records")
+                    for r in range(1, len(run.rounds) + 1)] if len(table) else [],
+        "seconds": run.seconds, "outputs": {k: str(v) for k, v in outputs.items()},
+    }
+    common.report(args, _summary(results, mapped.notes()), results)
+
+
+def _summary(r, notes):
+    lines = [f"Constraints from {r['n_demonstrations']} continuous demonstrations of {r['steps']} steps of "
+             f"{r['dt']:g} s ({r['input']}), system {r['dynamics']!r} on {' x '.join(map(str, r['cells']))} cells, "
+             f"{r['n_controls']} controls, {r['scheme']} discretization",
+             f"Mapping: {notes}", f"{r['n_candidates']} candidates ({r['thresholds']} thresholds; "
+                                  f"{r['thresholds_raised_by_lemma']} raised above eq. 3.3)", ""]
+    for i, ranking in enumerate(r["ranking"], start=1):
+        lines.append(f"round {i}" + ("" if i <= len(r["chosen"]) else "  (not accepted: stop rule)"))
+        lines.append(f"  {'rank':>4}  {'constraint':<46}{'psi':>7}{'F':>11}{'-log F':>9}{'exact gain':>12}")
+        for row in ranking:
+            mark = "  <- chosen" if row["chosen"] else ""
+            lines.append(f"  {row['rank']:>4}  {row['constraint'][:45]:<46}{row['psi']:>7.3f}{row['F']:>11.4g}"
+                         f"{row['neg_log_F']:>9.4f}{row['exact_gain']:>12.4f}{mark}")
+        lines.append("")
+    why = {"rounds": f"--rounds {r['rounds']} reached",
+           "min-gain": f"the best remaining constraint gains less than --min-gain {r['min_gain']:g} nats per demonstration",
+           "no candidate left": "no feasible candidate left"}[r["stopped"]]
+    lines.append(f"Stopped: {why}. Chosen constraints ({len(r['chosen'])}):")
+    for row in r["chosen"]:
+        lines.append(f"  round {row['round']}: {row['constraint']} (psi = {row['psi']:.3f}), F = {row['F']:.4g}, "
+                     f"exact gain {row['exact_gain']:.4f} nats/demo")
+    lines += ["", "F: Z_C+/Z_C0 (Algorithm 4); exact gain: per-demonstration increase of the log-likelihood.",
+              "wrote " + ", ".join(r["outputs"].values())]
+    return "\n".join(lines)
+
+
+def run_simulate(args):
+    if args.n is not None and args.n < 1:
+        raise common.InputError(f"--n {args.n}: must be at least 1")
+    if args.seed is not None and args.seed < 0:
+        raise common.InputError(f"--seed {args.seed}: must be >= 0")
+    if args.noise is not None and not 0 <= args.noise:
+        raise common.InputError(f"--noise {args.noise}: must be >= 0")
+    (_simulate_world if args.world else _simulate_system)(args)
+
+
+def _simulate_system(args):
+    import numpy as np
+    from ..constraints.continuous import demonstrators as dm
+    from ..constraints.continuous import load_system, parse_region, write_recording
+    path = common.existing_file(args.system)
+    with common.about(path):
+        spec = load_system(path)
+    problem, sim = spec.problem, dict(spec.simulate)
+    texts = args.hidden if args.hidden is not None else sim["hidden_text"]
+    try:
+        hidden = [parse_region(text, problem.grid.names, spec.candidates["plane"]) for text in texts]
+    except ValueError as err:
+        raise common.InputError(f"--hidden: {err}") from None
+    n, seed = args.n or sim["n"], sim["seed"] if args.seed is None else args.seed
+    kind = args.demonstrator or sim["demonstrator"]
+    noise = sim["noise"] if args.noise is None else args.noise
+    starts = dm.starts_around(sim["start"], sim["spread"], n, seed)
+    with common.about(path), common.progress(args, total=1, desc=f"simulating ({kind})", unit="run") as bar:
+        if kind == "soft":
+            demonstrator = dm.soft_demonstrator(problem, hidden, sim["fine_cells"], temperature=sim["temperature"])
+            recording = dm.rollout(demonstrator, starts, seed + 1, noise, sim["record_every"])
+        else:
+            recording = dm.mppi_rollouts(problem.replace(reward=_tempered(problem.reward, sim["temperature"])), hidden,
+                                         starts, seed + 1, sim["samples"], sim["plan_steps"], sim["sigma"], noise,
+                                         sim["record_every"], sim["margin"])
+        bar.update(1)
+    if args.no_controls:
+        from dataclasses import replace
+        recording = replace(recording, controls=None)
+    out = common.output_path(args, "trajectories.csv")
+    write_recording(out, recording, problem.system.state_names, problem.system.control_names)
+    states = np.concatenate(recording.states)
+    ranges = {name: [float(states[:, i].min()), float(states[:, i].max())] for i, name in enumerate(problem.grid.names)}
+    results = {"command": "constraints simulate", "system": str(path), "demonstrator": kind, "hidden": list(texts),
+               "n_demonstrations": n, "seed": seed, "noise": noise, "samples_per_demonstration": len(recording.times[0]),
+               "period_seconds": float(recording.times[0][1] - recording.times[0][0]), "ranges": ranges,
+               "controls_written": not args.no_controls, "outputs": {"trajectories": str(out)}}
+    lines = [f"Simulated {n} demonstrations of {problem.system.spec!r} ({kind} demonstrator on the continuous dynamics, "
+             f"seed {seed}) under hidden constraints: {', '.join(texts) or 'none'}",
+             *[f"  {name}: {lo:.4g} .. {hi:.4g}" for name, (lo, hi) in ranges.items()], f"wrote {out}"]
+    common.report(args, "\n".join(lines), results)
+
+
+def _tempered(reward, temperature):
+    from dataclasses import replace
+    return replace(reward, temperature=float(temperature))
+
+
+def _grid_hidden(texts, grid):
+    """Chapter 3's ground truth from "cell COL ROW [psi P]" and "action NAME"."""
+    from ..constraints.gridworld import GRID_ACTIONS
+    states, psi, actions = [], [], []
+    for text in texts:
+        words = text.split()
+        try:
+            if words[0] == "cell" and len(words) in (3, 5) and (len(words) == 3 or words[3] == "psi"):
+                col, row = int(words[1]), int(words[2])
+                if not (0 <= col < grid.width and 0 <= row < grid.height):
+                    raise ValueError
+                states.append(grid.state(col, row))
+                psi.append(float(words[4]) if len(words) == 5 else 0.0)
+                continue
+            if words[0] == "action" and len(words) == 2 and words[1] in GRID_ACTIONS[:8]:
+                actions.append(GRID_ACTIONS.index(words[1]))
+                continue
+        except (ValueError, IndexError):
+            pass
+        raise common.InputError(f"--hidden {text!r}: write 'cell COL ROW' (0 <= COL < {grid.width}, 0 <= ROW < "
+                                f"{grid.height}), optionally followed by 'psi P', or 'action NAME' (E, NE, N, NW, W, SW, S, SE)")
+    return states, psi, actions
+
+
+def _simulate_world(args):
+    from ..constraints import constraint_mask, sample_demonstrations, write_demonstrations
+    from ..constraints.world import load_world
+    path = common.existing_file(args.world)
+    with common.about(path):
+        grid = load_world(path)
+    states, psi, actions = _grid_hidden(args.hidden or [], grid)
+    if any(not 0 <= p <= 1 for p in psi):
+        raise common.InputError("--hidden: psi must lie in [0, 1]")
+    n, seed = args.n or 100, args.seed or 0
+    with common.about(path):
+        mask = constraint_mask(grid.mdp, states, psi if psi else 0.0, actions)
+        demos = sample_demonstrations(grid.mdp, n, mask, rng=seed)
+    out = common.output_path(args, "demonstrations.csv")
+    write_demonstrations(out, demos)
+    results = {"command": "constraints simulate", "world": str(path), "hidden": list(args.hidden or []),
+               "n_demonstrations": n, "steps": demos.steps, "seed": seed, "outputs": {"demonstrations": str(out)}}
+    common.report(args, f"Simulated {n} demonstrations of {demos.steps} steps in {path} (Boltzmann agent, seed {seed}) "
+                        f"under: {', '.join(args.hidden or []) or 'no constraint'}\nwrote {out}", results)

@@ -1,0 +1,39 @@
+"""Constraints from continuous demonstrations (an extension: Section 3.4's next step).
+
+The thesis's chapters 2-3 infer constraints on a gridworld; Section 3.4 names the next step,
+handling the state as a continuous parameter by refining gridded state spaces (Stocking et al.
+2021, the thesis's reference [67]). This subpackage builds it on chapters 2-3's MDP, soft backup,
+chance thresholds and greedy inference:
+
+* :mod:`.systems` -- continuous dynamics x' = f(x, u): named systems and your own ``module:function``;
+* :mod:`.grid`, :mod:`.problem`, :mod:`.systemfile` -- the box and its cells, the controls, the
+  task, the tabular MDP, and the system TOML file that describes them;
+* :mod:`.discretization`, :mod:`.cluster` -- S(x, a, x') by Monte Carlo within cells or by
+  Kuhn-triangulation interpolation, in chunks that run in one process or on Dask;
+* :mod:`.recordings`, :mod:`.mapping` -- recorded trajectories (CSV), aligned to the time step and
+  mapped to cells and actions (controls inferred where they were not recorded);
+* :mod:`.regions`, :mod:`.candidates`, :mod:`.thresholds` -- bounds, disks, boxes and cells as
+  chance constraints with their maximum-likelihood thresholds (eq. 3.3, Lemma 3.2.1);
+* :mod:`.inference`, :mod:`.refine` -- the greedy inference in the constraints' units, and
+  refinement of the grid near an inferred boundary;
+* :mod:`.demonstrators` -- demonstrators on the TRUE continuous system (fine-grid soft-optimal, MPPI);
+* :mod:`.experiments`, :mod:`.soft_hjb`, :mod:`.plots` -- notebook 09's measurements and figures.
+"""
+
+from .candidates import RegionCandidates, bound_regions, box_regions, disk_regions, region_candidates
+from .demonstrators import mppi_rollouts, rollout, soft_demonstrator, starts_around
+from .discretization import discretize
+from .grid import Grid
+from .inference import ContinuousInference, boundary_errors, infer
+from .mapping import to_demonstrations
+from .problem import Problem, QuadraticReward
+from .recordings import Recording, read_recording, write_recording
+from .regions import Bound, Box, Disk, boundary_distance, parse_region
+from .systemfile import load_system, system_from_mapping
+from .systems import SYSTEMS, System, integrate, named_system
+
+__all__ = ["SYSTEMS", "Bound", "Box", "ContinuousInference", "Disk", "Grid", "Problem", "QuadraticReward", "Recording",
+           "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors", "box_regions",
+           "discretize", "disk_regions", "infer", "integrate", "load_system", "mppi_rollouts", "named_system",
+           "parse_region", "read_recording", "region_candidates", "rollout", "soft_demonstrator", "starts_around",
+           "system_from_mapping", "to_demonstrations", "write_recording"]

@@ -1,0 +1,200 @@
+"""Notebook 09's measurements: how the discretization and the inference behave as settings change.
+
+* :func:`scheme_agreement` -- the two discretizations against the true successor and each other;
+* :func:`resolution_sweep` -- boundary error against grid resolution (both schemes);
+* :func:`demos_sweep` -- boundary error against the number of demonstrations (several draws);
+* :func:`robustness` -- one row per hyperparameter variant (resolution, time step, control set,
+  temperature, scheme, samples, thresholds);
+* :func:`measured` -- a run's wall time and peak memory in a fresh process (no timings reach the
+  notebook's saved results: they vary from run to run).
+"""
+
+import math
+import multiprocessing
+import resource
+import time
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+
+from .discretization import discretize
+from .grid import Grid
+from .inference import boundary_errors, infer
+from .regions import boundary_distance
+
+
+ROUNDING = 1e-12   # distances below this are float64 rounding (their digits vary by machine): reported as 0
+
+
+def with_cells(problem, cells):
+    """``problem`` on a uniform grid of ``cells`` per coordinate (an int for all) over the same box."""
+    g = problem.grid
+    cells = [cells] * g.ndim if np.isscalar(cells) else list(cells)
+    return problem.replace(grid=Grid.uniform(g.low, g.high, cells, g.periodic, g.names, g.units))
+
+
+def with_dt(problem, dt):
+    """``problem`` with time step ``dt`` and the horizon that keeps its duration T dt."""
+    return problem.replace(dt=float(dt), horizon=max(1, int(round(problem.horizon * problem.dt / dt))))
+
+
+def with_levels(problem, n):
+    """``problem`` with ``n`` evenly spaced levels of a one-dimensional control between its extremes."""
+    lo, hi = problem.controls.min(), problem.controls.max()
+    return problem.replace(controls=np.linspace(lo, hi, int(n))[:, None])
+
+
+def scheme_agreement(problem, resolutions):
+    """Per resolution: for interior cells, the mean distance from each scheme's expected successor
+    centre to the true successor of the cell centre, and the largest gap between the two schemes'
+    expected successors (distances in units of the box, each coordinate divided by its extent; below
+    ``ROUNDING`` reported as 0: the barycentric scheme's is exact up to rounding)."""
+    rows = []
+    for cells in resolutions:
+        p = with_cells(problem, cells)
+        g, A = p.grid, p.n_actions
+        centres = g.centers()
+        scale = g.high - g.low
+        truth = p.step(np.repeat(centres, A, axis=0), np.tile(p.controls, (g.n_cells, 1)))
+        inside = (truth > g.low + 0.1 * scale) & (truth < g.high - 0.1 * scale)
+        inner = np.all(inside | np.asarray(g.periodic)[None], axis=1)       # away from the clipped edges
+        means = {}
+        for scheme in ("sample", "barycentric"):
+            S = discretize(p.replace(scheme=scheme), scheduler="inline")
+            means[scheme] = _expected_successor(S, g, truth)
+        row = {"cells": g.n_cells, "cells per coordinate": " x ".join(map(str, g.shape)),
+               "largest cell width": float(max((np.diff(e) / (e[-1] - e[0])).max() for e in g.edges))}
+        for scheme, mean in means.items():
+            gap = float(np.mean(np.linalg.norm((mean - truth)[inner] / scale, axis=1)))
+            row[f"{scheme}: mean |E x' - x'|"] = gap if gap > ROUNDING else 0.0     # exact up to rounding: 0
+        row["max |sample - barycentric|"] = float(np.max(np.linalg.norm(
+            (means["sample"] - means["barycentric"])[inner] / scale, axis=1)))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _expected_successor(S, grid, reference):
+    """E_{x' ~ S(x, a, .)}[centre of x'] (X*A, d), periodic coordinates unwrapped around ``reference``."""
+    coo = S.tocoo()
+    centres = grid.centers()[coo.col]
+    for i in np.flatnonzero(grid.periodic):
+        period = grid.high[i] - grid.low[i]
+        d = centres[:, i] - reference[coo.row, i]
+        centres[:, i] = reference[coo.row, i] + np.mod(d + period / 2, period) - period / 2
+    out = np.zeros((S.shape[0], grid.ndim))
+    for i in range(grid.ndim):
+        out[:, i] = np.bincount(coo.row, weights=coo.data * centres[:, i], minlength=S.shape[0])
+    return out
+
+
+def summary(run, truth):
+    """One row about an inference against the ``truth`` regions: the chosen constraints, F of the first,
+    whether the first is of the truth's kind and on its coordinates, the boundary error(s)
+    (:func:`.inference.boundary_errors`), thresholds Lemma 3.2.1 raised, steps S gave probability 0."""
+    errors = boundary_errors(run, truth)
+    regions = run.chosen_regions()
+    first = regions[0] if regions else None
+    first_error = boundary_distance(first, truth[0]) if first is not None and truth else math.nan
+    return {"chosen": "; ".join(run.candidates.label(k) for k in run.result.chosen) or "none",
+            "F of the first": float(run.result.F[0]) if regions else math.nan,
+            "first is the true kind": bool(np.isfinite(first_error)),
+            **{("error" if len(truth) == 1 else f"error {n}"): e for n, e in enumerate(errors)},
+            "thresholds raised": run.candidates.raised, "zero-probability steps": run.mapped.added}
+
+
+def resolution_sweep(problem, recording, resolutions, truth, schemes=("sample", "barycentric"), **options):
+    """Boundary error of the inferred constraint against the ``truth`` regions, per scheme and
+    resolution (``options`` go to :func:`.inference.infer`)."""
+    rows = []
+    for scheme in schemes:
+        for cells in resolutions:
+            p = with_cells(problem, cells).replace(scheme=scheme)
+            run = infer(p, recording, **options)
+            rows.append({"scheme": scheme, "cells": p.grid.n_cells, "cells per coordinate": " x ".join(map(str, p.grid.shape)),
+                         **summary(run, truth)})
+    return pd.DataFrame(rows)
+
+
+def first_demonstrations(recording, n):
+    """The recording's first ``n`` demonstrations."""
+    return replace(recording, **{k: getattr(recording, k)[:n] for k in ("ids", "times", "states")},
+                   controls=None if recording.controls is None else recording.controls[:n],
+                   lines=None if recording.lines is None else recording.lines[:n])
+
+
+def tempered(reward, factor):
+    """``reward`` with its temperature multiplied by ``factor``."""
+    return replace(reward, temperature=reward.temperature * float(factor))
+
+
+def demos_sweep(problem, recordings, counts, truth, **options):
+    """Boundary error against the number of demonstrations: ``recordings`` is a list of recordings
+    (independent draws); for each and each n in ``counts``, inference on its first n demonstrations."""
+    rows = []
+    for draw, recording in enumerate(recordings):
+        for n in counts:
+            run = infer(problem, first_demonstrations(recording, n), **options)
+            rows.append({"draw": draw, "demonstrations": n, **summary(run, truth)})
+    return pd.DataFrame(rows)
+
+
+def robustness(problem, recording, variants, truth, **options):
+    """One row per variant: ``variants`` maps a label to a function of the problem returning the
+    varied problem (e.g. ``lambda p: with_dt(p, 0.05)``) or to a dict of extra ``infer`` options."""
+    rows = []
+    for label, change in variants.items():
+        p, extra = (change(problem), {}) if callable(change) else (problem, dict(change))
+        run = infer(p, recording, **(options | extra))
+        rows.append({"setting": label, "cells": p.grid.n_cells, "controls": p.n_actions, "dt": p.dt,
+                     "temperature": p.reward.temperature, "scheme": p.scheme, **summary(run, truth)})
+    return pd.DataFrame(rows)
+
+
+def _child(fn, args, kwargs, queue):
+    start = time.perf_counter()
+    result = fn(*args, **kwargs)
+    queue.put((result, time.perf_counter() - start, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+
+
+def measured(fn, *args, **kwargs):
+    """``(result, seconds, peak MiB)`` of ``fn(*args, **kwargs)`` run in a fresh process (spawned:
+    the peak resident memory is that run's, plus the imported libraries). ``fn`` and its arguments
+    and result must pickle; ``fn`` must be importable (a module-level function)."""
+    context = multiprocessing.get_context("spawn")
+    queue = context.Queue()
+    child = context.Process(target=_child, args=(fn, args, kwargs, queue))
+    child.start()
+    try:
+        result = queue.get(timeout=3600)
+    finally:
+        child.join()
+    return result
+
+
+def timed_inference(problem, recording, truth=(), **options):
+    """A picklable summary of :func:`.inference.infer` for :func:`measured`: the cells, the stages'
+    seconds, the chosen constraints and their ``regions``, the boundary error against each region of
+    ``truth``."""
+    import mutual  # noqa: F401  (the XLA setting, as in the parent)
+    run = infer(problem, recording, **options)
+    return {"cells": problem.grid.n_cells, **{f"{k} s": v for k, v in run.seconds.items()},
+            "candidates": len(run.candidates), **summary(run, list(truth)), "regions": run.chosen_regions()}
+
+
+def idle_memory():
+    """Peak resident memory (MiB) of a fresh process that only imports the libraries and compiles nothing."""
+    return measured(_nothing)[2]
+
+
+def _nothing():
+    import jax  # noqa: F401
+    import mutual.constraints.continuous  # noqa: F401
+    return None
+
+
+def reportable(value):
+    """A boundary error for the report: the number, or "not found" where no constraint of the true
+    region's kind was chosen (nan)."""
+    value = float(value)
+    return value if math.isfinite(value) else "not found"
