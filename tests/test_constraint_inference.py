@@ -185,15 +185,14 @@ def test_notebooks_report_the_chapter_numbers(executed_notebook):
 
 
 def test_notebooks_save_no_timings_and_the_scan_tables(executed_notebook):
-    from mutual.compendium.paths import figures_dir
     executed_notebook("01_constraint_inference")
     executed_notebook("02_chance_thresholds")
-    assert not list(figures_dir().glob("fig_2_complexity*"))
-    table = pd.read_csv(figures_dir() / "table_3_scan_f_retracts.csv")
+    assert not list(executed_notebook.folder.glob("fig_2_complexity*"))
+    table = pd.read_csv(executed_notebook.folder / "table_3_scan_f_retracts.csv")
     assert {"width", "horizon"} <= set(table.columns) and table.filter(like="scale").stack().str.contains("/").all()
-    assert (figures_dir() / "table_3_scan_joint.csv").exists() and (figures_dir() / "table_3_lemma_exact.csv").exists()
-    assert (figures_dir() / "anim_3_2.gif").stat().st_size < 2 * 2 ** 20
-    sides = pd.read_csv(figures_dir() / "table_3_layouts_side_by_side.csv")
+    assert (executed_notebook.folder / "table_3_scan_joint.csv").exists() and (executed_notebook.folder / "table_3_lemma_exact.csv").exists()
+    assert (executed_notebook.folder / "anim_3_2.gif").stat().st_size < 2 * 2 ** 20
+    sides = pd.read_csv(executed_notebook.folder / "table_3_layouts_side_by_side.csv")
     assert set(sides["run"]) == {"first layout (result)", "second layout (moved after a run)",
                                  "first layout, loiter anywhere"}
 
