@@ -166,3 +166,26 @@ def test_record_repr_is_short(functions):
     sup = NoisySupervisor(_member(library, 1.0), 0.2, 0.05)
     _, record = simulate_teaming([Team(_member(library, 1.0))], [sup], [1], TeamingConfig(duration=2.0), record=0)
     assert repr(record).startswith("TeamingRecord(") and len(repr(record)) < 120
+
+
+@pytest.mark.parametrize("exact", [False, True], ids=["grid", "exact"])
+def test_values_lie_above_a_level_beyond_its_reach(functions, exact):
+    """_Stack.reach (which pairs the simulation evaluates): farther out than reach(level), no state's value is
+    below the level, on the grid (any heading) and in closed form; and the bound is not vacuous: at level 0 it
+    is the unsafe set's head-on reach sqrt(2 R r + r^2) to within a grid cell's diagonal."""
+    library, conservative = functions if not exact else study_value_functions(quick=True, exact=True)
+    fns = [library[0], _member(library, 1.0), library[len(library) - 1], conservative]
+    which = np.repeat(np.arange(len(fns)), 50)
+    stack = _Stack(fns, which, "test")
+    rng = np.random.default_rng(7)
+    level = rng.uniform(-1.0, 3.0, len(which))
+    reach = stack.reach(level)
+    w = stack.spec.half_width
+    states = rng.uniform([-w, -w, -np.pi], [w, w, np.pi], (len(which), 400, 3))
+    values = stack.interp(states)
+    beyond = np.hypot(states[..., 0], states[..., 1]) > reach[:, None]
+    assert beyond.mean() > 0.5 and np.all(values[beyond] >= level.repeat(400).reshape(beyond.shape)[beyond])
+    at_zero = stack.reach(np.zeros(len(which)))[::50]
+    expected = [unsafe_reach(f.w_max, f.obstacle_radius) for f in fns]
+    assert np.all(at_zero >= np.array(expected) - 1e-9)
+    assert np.all(at_zero <= np.array(expected) + (0 if exact else 2 * np.hypot(*stack.spec.spacings[:2])) + 1e-3)

@@ -50,7 +50,8 @@ MIXES = {
 DESIGN_SEED = 0           # the study notebook's design seed
 FP_COLUMNS = tuple(f"fp_{t}" for t in TREATMENTS)
 # what a simulated cohort depends on: these study modules and the whole chapter 4 package but its views
-_SOURCES = ("study/cohort_power.py", "study/cohort.py", "study/teaming.py", "study/design.py", "supervision/*.py")
+_SOURCES = ("study/cohort_power.py", "study/cohort.py", "study/teaming.py", "study/teaming_batch.py",
+            "study/value_stack.py", "study/design.py", "supervision/*.py")
 _NOT_SOURCES = ("supervision/explore.py",)
 
 

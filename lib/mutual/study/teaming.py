@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..supervision.dubins import TRUE_W_MAX, dubins_step, wrap_angle
 from ..supervision.reachability import ValueFunction
 from ..supervision.supervisor import NoisySupervisor
 from .design import OBSTACLE_RADIUS
+from .teaming_batch import _candidates, _drive, _end_trips, _start_batch, _supervise
 from .value_stack import _Stack, _unique
 
 
@@ -137,139 +137,6 @@ def _free_positions(rng, config, n):
     raise ValueError("could not place the obstacles: lower n_obstacles or obstacle_gap, or enlarge the workspace")
 
 
-def _candidates(rng, config, n):
-    r = config.obstacle_radius
-    return rng.uniform([config.depot_clearance, 2 * r], [config.width - config.depot_clearance, config.height - 2 * r],
-                       size=(n, 2))
-
-
-def _relocate(rng, config, others, robots):
-    """A new centre for a removed obstacle: of 64 random candidates ``obstacle_gap`` clear of the
-    other obstacles (or the clearest, if none is), the one farthest from every robot."""
-    cand = _candidates(rng, config, 64)
-    gap = np.min(np.linalg.norm(cand[:, None] - others[None], axis=2), axis=1)
-    clear = gap >= config.obstacle_gap
-    pool = cand[clear] if clear.any() else cand[[np.argmax(gap)]]
-    far = np.min(np.linalg.norm(pool[:, None] - robots[None], axis=2), axis=1)
-    return pool[np.argmax(far)]
-
-
-@dataclass
-class _Batch:
-    """The mutable state of a batch of Phase III trials (B trials, R robots, O obstacles)."""
-    robots: np.ndarray          # (B, R, 3) world states
-    obs: np.ndarray             # (B, O, 2) obstacle centres
-    goal_x: np.ndarray          # (B, R) depot the robot is heading for
-    goal_y: np.ndarray          # (B, R)
-    origin_x: np.ndarray        # (B, R) depot it left
-    detected: np.ndarray        # (B, R, O) this trip's detections
-    threshold: np.ndarray       # (B, R, O) supervisor's judgement level for the current approach
-    was_near: np.ndarray        # (B, R, O)
-    placed_inside: np.ndarray   # (B, R, O) the obstacle reappeared with the robot already inside {V_S < mu}
-    latched: np.ndarray         # (B, R) obstacle being avoided, or -1
-    turn: np.ndarray            # (B, R) the avoid control while latched
-    counts: dict
-
-
-def _start_batch(versions, config, rng):
-    layouts = [task_layout(v, config) for v in versions]
-    robots = np.stack([l[1] for l in layouts]).astype(float)
-    n, R, O = len(versions), config.n_robots, config.n_obstacles
-    goal_x = np.where(robots[..., 0] == 0.0, config.width, 0.0)
-    return _Batch(robots=robots, obs=np.stack([l[0] for l in layouts]), goal_x=goal_x,
-                  goal_y=rng.uniform(2.0, config.height - 2.0, (n, R)), origin_x=config.width - goal_x,
-                  detected=rng.random((n, R, O)) < config.detection_prob, threshold=np.full((n, R, O), -np.inf),
-                  was_near=np.zeros((n, R, O), bool), placed_inside=np.zeros((n, R, O), bool),
-                  latched=np.full((n, R), -1), turn=np.zeros((n, R)),
-                  counts={k: np.zeros(n, int) for k in ("trips", "interventions", "collisions", "false_positives",
-                                                        "unavoidable_false_positives",
-                                                        "encounters", "detected_encounters")})
-
-
-def _drive(b, teams, config):
-    """Nominal steering to the goal, overridden by the minimally invasive avoid control (Sec. 4.2, 4.5).
-
-    Detected obstacles only: a robot engages when its nominal next state would leave
-    ``{V_team >= alpha + margin}``, then turns at the optimal control's sign until it stops
-    approaching that obstacle (it has cleared it); turn rates are clipped to the true ``w_max``.
-    """
-    stack, alpha = teams
-    n, R, _ = b.robots.shape
-    bearing = np.arctan2(b.goal_y - b.robots[..., 1], b.goal_x - b.robots[..., 0])
-    u = np.clip(config.heading_gain * wrap_angle(bearing - b.robots[..., 2]), -TRUE_W_MAX, TRUE_W_MAX)
-    nxt = dubins_step(b.robots.reshape(-1, 3), u.ravel(), config.dt).reshape(n, R, 3)
-    v_next = stack.interp(_relative(nxt, b.obs)) - alpha - config.filter_margin
-    v_next = np.where(b.detected, v_next, np.inf)
-    worst = np.argmin(v_next, axis=2)
-    engage = (np.take_along_axis(v_next, worst[..., None], 2)[..., 0] < 0) & (b.latched != worst)
-    if engage.any():
-        bi, ri = np.nonzero(engage)
-        rel_now = np.concatenate([b.robots[bi, ri, :2] - b.obs[bi, worst[bi, ri]], b.robots[bi, ri, 2:]], axis=1)
-        slope = stack.interp(rel_now, fill_value=0.0, derivative=True, rows=bi)
-        # the optimal avoid control u* = w sign(dV/dtheta) of the team's model, clipped to the robots' turn rate
-        w_model = np.minimum(stack.w_max[bi], TRUE_W_MAX)
-        b.turn[bi, ri] = np.where(slope >= 0, w_model, -w_model)
-        b.latched[bi, ri] = worst[bi, ri]
-    if (b.latched >= 0).any():
-        nxt = dubins_step(b.robots.reshape(-1, 3), np.where(b.latched >= 0, b.turn, u).ravel(),
-                          config.dt).reshape(n, R, 3)
-    b.robots = nxt
-    if (b.latched >= 0).any():
-        held = b.robots[..., :2] - np.take_along_axis(b.obs, np.maximum(b.latched, 0)[..., None], 1)
-        approaching = held[..., 0] * np.cos(b.robots[..., 2]) + held[..., 1] * np.sin(b.robots[..., 2]) < 0
-        b.latched = np.where(approaching, b.latched, -1)
-
-
-def _supervise(b, sups, config, rng):
-    """The noisy idealized supervisor (Sec. 4.3): a fresh judgement level ``mu - w`` whenever a robot
-    comes within ``near_distance`` of an obstacle; remove (relocate) the obstacle when a near robot
-    reaches ``V_S <= level``. Returns the (trial, obstacle) pairs removed."""
-    stack, mu, sigma = sups
-    rel = _relative(b.robots, b.obs)
-    near = np.hypot(rel[..., 0], rel[..., 1]) <= config.near_distance
-    fresh = near & ~b.was_near
-    if fresh.any():
-        b.threshold = np.where(fresh, mu - sigma * rng.standard_normal(fresh.shape), b.threshold)
-        b.counts["encounters"] += fresh.sum(axis=(1, 2))
-        b.counts["detected_encounters"] += (fresh & b.detected).sum(axis=(1, 2))
-    b.was_near = near
-    b.placed_inside &= near
-    trigger = near & (stack.interp(rel) <= b.threshold)
-    removed = list(zip(*np.nonzero(trigger.any(axis=1))))
-    for t, o in removed:
-        involved = near[t, :, o] | trigger[t, :, o]
-        false_positive = bool(np.all(b.detected[t, involved, o]))
-        b.counts["interventions"][t] += 1
-        b.counts["false_positives"][t] += false_positive
-        b.counts["unavoidable_false_positives"][t] += false_positive and bool(b.placed_inside[t, involved, o].any())
-        b.obs[t, o] = _relocate(rng, config, np.delete(b.obs[t], o, axis=0), b.robots[t, :, :2])
-        b.detected[t, :, o] = rng.random(b.detected.shape[1]) < config.detection_prob
-        b.was_near[t, :, o] = False
-        b.latched[t, b.latched[t] == o] = -1
-        moved = _relative(b.robots[t:t + 1], b.obs[t:t + 1, o:o + 1])[0, :, 0]
-        b.placed_inside[t, :, o] = stack.interp(moved[None], rows=np.array([t]))[0] < mu[t, 0, 0]
-    return removed
-
-
-def _end_trips(b, config, rng):
-    """Collisions restart a trip from its depot, arrivals complete it; both draw a new goal and detections."""
-    gap = b.robots[:, :, None, :2] - b.obs[:, None, :, :]
-    crashed = np.any(np.hypot(gap[..., 0], gap[..., 1]) < config.obstacle_radius, axis=2)
-    arrived = (np.abs(b.robots[..., 0] - b.goal_x) < config.goal_tolerance) & ~crashed
-    b.counts["collisions"] += crashed.sum(axis=1)
-    b.counts["trips"] += arrived.sum(axis=1)
-    if crashed.any():
-        b.robots[crashed] = np.stack([b.origin_x[crashed], rng.uniform(2.0, config.height - 2.0, crashed.sum()),
-                                      np.where(b.goal_x[crashed] > b.origin_x[crashed], 0.0, np.pi)], axis=1)
-    b.goal_x, b.origin_x = np.where(arrived, b.origin_x, b.goal_x), np.where(arrived, b.goal_x, b.origin_x)
-    renew = crashed | arrived
-    if renew.any():
-        b.goal_y = np.where(renew, rng.uniform(2.0, config.height - 2.0, renew.shape), b.goal_y)
-        b.detected = np.where(renew[..., None], rng.random(b.detected.shape) < config.detection_prob, b.detected)
-        b.was_near &= ~renew[..., None]
-        b.latched = np.where(renew, -1, b.latched)
-
-
 def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=0, record=None, details=False):
     """Run a batch of Phase III trials (one per ``teams[i]``, ``supervisors[i]``, ``versions[i]``).
 
@@ -300,13 +167,15 @@ def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=
                                or not 0 <= record < n):
         raise ValueError(f"record must index a trial (0..{n - 1}), got {record!r}")
     rng = np.random.default_rng(seed)
-    b = _start_batch(versions, config, rng)
+    layouts = {v: task_layout(v, config) for v in dict.fromkeys(versions)}   # a layout depends on its version
+    b = _start_batch(versions, layouts, config, rng, details)
     team_stack = _Stack(*_unique([t.value for t in teams]), "team")
     team_stack.w_max = np.array([t.value.w_max for t in teams])
     sup_stack = _Stack(*_unique([s.value_fn for s in supervisors]), "supervisor")
-    col = lambda values: np.array(values, dtype=float)[:, None, None]
-    team_args = (team_stack, col([t.alpha for t in teams]))
-    sup_args = (sup_stack, col([s.mu for s in supervisors]), col([s.sigma for s in supervisors]))
+    alpha = np.array([t.alpha for t in teams], dtype=float)
+    team_args = (team_stack, alpha, team_stack.reach(alpha + config.filter_margin))
+    sup_args = (sup_stack, np.array([s.mu for s in supervisors], dtype=float),
+                np.array([s.sigma for s in supervisors], dtype=float))
     rec = TeamingRecord() if record is not None else None
     every = max(1, int(round(0.25 / config.dt)))
     for step in range(int(round(config.duration / config.dt))):
@@ -317,8 +186,8 @@ def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=
             rec.removals += [(step * config.dt, o) for t, o in removed if t == record]
             if step % every == 0:
                 rec.times.append(step * config.dt)
-                rec.robots.append(b.robots[record].copy())
-                rec.obstacles.append(b.obs[record].copy())
+                rec.robots.append(np.stack([b.x[record], b.y[record], b.theta[record]], axis=1))
+                rec.obstacles.append(np.stack([b.ox[record], b.oy[record]], axis=1))
                 rec.detected.append(b.detected[record].copy())
     unavoidable = b.counts.pop("unavoidable_false_positives")
     out = pd.DataFrame(b.counts)
@@ -327,13 +196,6 @@ def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=
     out["score"] = (config.trip_reward * out["trips"] - config.collision_cost * out["collisions"]
                     - config.removal_cost * out["interventions"])
     return (out, rec) if record is not None else out
-
-
-def _relative(robots, obstacles):
-    """Robot states relative to every obstacle centre: (B, R, 3), (B, O, 2) -> (B, R, O, 3)."""
-    p = robots[:, :, None, :2] - obstacles[:, None, :, :]
-    theta = np.broadcast_to(robots[:, :, None, 2:3], p.shape[:-1] + (1,))
-    return np.concatenate([p, theta], axis=-1)
 
 
 def perfect_fit_trials(supervisors, versions, config=TeamingConfig(), seed=0):

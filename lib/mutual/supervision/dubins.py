@@ -26,6 +26,7 @@ from hj_reachability import dynamics, sets
 
 SPEED = 3.0  # eq. (5.1)
 TRUE_W_MAX = 1.0  # eq. (5.1)
+_EPS = np.finfo(float).eps
 
 
 def _real(value):
@@ -163,11 +164,16 @@ def dubins_step(states, controls, dt, speed=SPEED):
         raise ValueError(f"controls must be one turn rate or one per state ({len(s)}), got {controls!r}") from None
     if not np.all(np.isfinite(u)):
         raise ValueError("controls contains NaN or infinite entries")
-    theta = s[:, 2]
+    return np.stack(dubins_arc(s[:, 0], s[:, 1], s[:, 2], u, dt, speed), axis=1)
+
+
+def dubins_arc(x, y, theta, u, dt, speed=SPEED):
+    """:func:`dubins_step` on coordinate arrays, unchecked (for simulation loops): the new ``(x, y, theta)``."""
     turn = u * dt
-    # the chord of the arc: length v * 2 sin(u dt / 2) / u (finite as u -> 0), direction theta + u dt / 2
-    chord = speed * dt * np.sinc(turn / (2 * np.pi))
+    # the chord of the arc: length v * 2 sin(u dt / 2) / u (finite as u -> 0), direction theta + u dt / 2;
+    # sinc as np.sinc computes it (without its per-call dtype look-up)
+    half = np.pi * (turn / (2 * np.pi))
+    half = np.where(half, half, _EPS)
+    chord = speed * dt * (np.sin(half) / half)
     mid = theta + turn / 2
-    x = s[:, 0] + chord * np.cos(mid)
-    y = s[:, 1] + chord * np.sin(mid)
-    return np.stack([x, y, wrap_angle(theta + turn)], axis=1)
+    return x + chord * np.cos(mid), y + chord * np.sin(mid), wrap_angle(theta + turn)
