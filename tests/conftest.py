@@ -1,51 +1,130 @@
 """Shared test set-up: quiet, single-threaded numerics and a private output folder,
 so no test ever writes into the committed ``figures/`` (or the scratch folder)."""
 
+import inspect
 import json
 import os
+import re
+import subprocess
+import sys
 import tempfile
+import threading
 from pathlib import Path
 
+import nbformat
 import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+    os.environ[_var] = "1"  # this process and the notebook lane (below): two single-threaded lanes on two cores
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
 os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
 os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
-from mutual.compendium.notebooks import NotebookError, execute
-from mutual.compendium.paths import NOTEBOOKS, results_dir
+from mutual.compendium.paths import NOTEBOOKS
+
+
+LANE_OUTPUT = Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "notebooks"  # the lane's own: a runner holds its folder
+_CALLS = re.compile(r"executed_notebook\(\s*[\"'](\d\d_\w+)[\"']")
+
+
+class NotebookLane:
+    """Quick runs of the notebooks the collected tests need, one after another in a background
+    process (the runner, ``python -m mutual.compendium.notebooks --quick``), while the unit tests
+    run in this one: two lanes on two cores, and every notebook runs once per session. The
+    overview runs last (it renders the other notebooks' results)."""
+
+    def __init__(self, stems):
+        self.stems = [s for s in sorted(stems) if not s.startswith("00_")] + sorted(s for s in stems if s.startswith("00_"))
+        self.done = {stem: threading.Event() for stem in self.stems}
+        self.outcome, self.process, self.stopped = {}, None, False
+        self.thread = threading.Thread(target=self._run, daemon=True, name="notebook lane")
+
+    def _run(self):
+        try:
+            for stem in self.stems:
+                if self.stopped:
+                    break
+                command = [sys.executable, "-m", "mutual.compendium.notebooks", "--quick", "--output", str(LANE_OUTPUT),
+                           str(NOTEBOOKS / f"{stem}.ipynb")]
+                self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                out, err = self.process.communicate()
+                self.outcome[stem] = (self.process.returncode, (err.strip() or out.strip()).splitlines()[-1:])
+                self.done[stem].set()
+        finally:  # whatever happened, nobody waits forever
+            for event in self.done.values():
+                event.set()
+
+    def wait(self, stem):
+        self.done[stem].wait()
+        return self.outcome.get(stem, (1, ["the session stopped before this notebook ran"]))
+
+    def stop(self):
+        self.stopped = True
+        if self.process is not None and self.process.poll() is None:
+            self.process.terminate()
+        for event in self.done.values():
+            event.set()
+
+
+def _needed_notebooks(items):
+    """Stems of the notebooks the collected tests use (a ``stem`` parameter, or a literal call)."""
+    stems = set()
+    for item in items:
+        if "executed_notebook" not in getattr(item, "fixturenames", ()):
+            continue
+        stem = getattr(item, "callspec", None) and item.callspec.params.get("stem")
+        stems |= {stem} if stem else set(_CALLS.findall(inspect.getsource(item.function)))
+    if any(s.startswith("00_") for s in stems):
+        stems |= {p.stem for p in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")}
+    return stems
+
+
+@pytest.hookimpl(trylast=True)  # after -k and -m have deselected what will not run
+def pytest_collection_modifyitems(session, config, items):
+    """Tests that read a notebook's run go last, in the order the lane runs the notebooks, and the
+    lane starts now: the unit tests run while the notebooks do."""
+    lane = NotebookLane(_needed_notebooks(items))
+    order = {stem: i for i, stem in enumerate(lane.stems)}
+
+    def key(item):
+        if "executed_notebook" not in getattr(item, "fixturenames", ()):
+            return -1
+        stem = getattr(item, "callspec", None) and item.callspec.params.get("stem")
+        stems = [stem] if stem else _CALLS.findall(inspect.getsource(item.function))
+        return max((order.get(s, len(order)) for s in stems), default=len(order))
+    items.sort(key=key)
+    config._notebook_lane = lane
+    if lane.stems and not config.option.collectonly:
+        lane.thread.start()
+
+
+def pytest_sessionfinish(session):
+    lane = getattr(session.config, "_notebook_lane", None)
+    if lane is not None:
+        lane.stop()
 
 
 @pytest.fixture(scope="session")
-def executed_notebook():
-    """``executed_notebook(stem)`` runs ``notebooks/<stem>.ipynb`` once per session with
-    ``quick=True`` in a fresh kernel and returns its results ``{claim_id: entry}``; the executed
-    notebook nodes are in ``executed_notebook.nodes``. The overview runs after every chapter
-    notebook, so that it renders their results."""
-    outcome, nodes = {}, {}
+def executed_notebook(pytestconfig):
+    """``executed_notebook(stem)`` waits for the quick run of ``notebooks/<stem>.ipynb`` (the
+    notebook lane ran it in a fresh kernel with ``quick=True``) and returns its results
+    ``{claim_id: entry}``; the executed notebooks are in ``executed_notebook.nodes``, their
+    outputs (figures, tables, results) in ``executed_notebook.folder``."""
+    lane = pytestconfig._notebook_lane
+    nodes = {}
 
     def run(stem):
-        if stem.startswith("00_"):
-            for other in sorted(p.stem for p in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
-                if not other.startswith("00_"):
-                    try:
-                        run(other)
-                    except pytest.fail.Exception:
-                        pass
-        if stem not in outcome:
-            try:
-                nodes[stem] = execute(NOTEBOOKS / f"{stem}.ipynb", {"quick": True}, timeout=900)
-                path = results_dir() / f"{stem}.json"
-                outcome[stem] = json.loads(path.read_text())["claims"] if path.exists() else {}
-            except (NotebookError, ValueError) as err:
-                outcome[stem] = err
-        if isinstance(outcome[stem], Exception):
-            pytest.fail(str(outcome[stem]))
-        return outcome[stem]
+        if stem not in lane.done:
+            pytest.fail(f"{stem}: no test collected for this session names the notebook (see tests/conftest.py)")
+        status, why = lane.wait(stem)
+        if status != 0:
+            pytest.fail(f"{stem}: {' '.join(why) or f'the runner exited with status {status}'}")
+        if stem not in nodes:
+            nodes[stem] = nbformat.read(str(LANE_OUTPUT / "executed" / f"{stem}.ipynb"), as_version=4)
+        path = LANE_OUTPUT / "results" / f"{stem}.json"
+        return json.loads(path.read_text())["claims"] if path.exists() else {}
 
-    run.nodes = nodes
+    run.nodes, run.folder = nodes, LANE_OUTPUT
     return run

@@ -137,6 +137,10 @@ CASES = [
     # the interventions CSV: the file, the row and the column
     (_csv(""), (), {}, ValueError, "interventions.csv: the file is empty"),
     (_csv(HEADER), (), {}, ValueError, "holds no interventions (a header but no rows)"),
+    (_csv(HEADER + "P1,0,1.0,-3,0.5,0.1\nP1 ,1,1.2,-3,0.5,0.1\n"), (), {}, ValueError,
+     "'P1' (row 1 (line 2 of the file)) and 'P1 ' (row 2 (line 3 of the file)) differ only in spaces"),
+    (_csv(HEADER + "Zo\u00eb,0,1.0,-3,0.5,0.1\nZoe\u0308,1,1.2,-3,0.5,0.1\n"), (), {}, ValueError,
+     "differ only in spaces or in how a character is encoded"),
     (_csv("participant,trial,time,x,y\nP01,0,1.0,2.0,3.0\n"), (), {}, ValueError, "missing column 'theta'"),
     (_csv(HEADER + "P01,0,1.0,-3,0.5,0.1\nP01,1,1.2,abc,0.5,0.1\n"), (), {}, ValueError,
      "row 2 (line 3 of the file), column 'x': 'abc' is not a finite number"),

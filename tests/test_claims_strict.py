@@ -5,8 +5,9 @@ can tell, read from the committed notebooks and the latest (this session's quick
   function that the notebook calls (``computed_by``) and its computation (``note``);
 * no such claim's value is a literal in the notebook (a constant, a name bound only to constants or
   to the parameters cell, arithmetic of those): parsed from the ``write_results`` calls with ast;
-* no value merely echoes a setting the notebook typed in (it equals the thesis value and a constant
-  the notebook set, e.g. the simulator's parameter recovered by a fit);
+* no value merely echoes a setting the notebook typed in (it equals or nearly equals the thesis value
+  and a constant the notebook set and fed into it, e.g. the simulator's parameter recovered by a fit;
+  or, for a boolean, it compares a result with the setting that produced it);
 * no comparison rule that cannot fail (tolerances as wide as the thesis value, bounds any value
   satisfies) and every rule fits its basis;
 * the README states the report's verdict counts.
@@ -92,20 +93,21 @@ def test_results_name_the_function_the_notebook_calls(stem, executed_notebook):
 
 @pytest.mark.parametrize("stem", CHAPTERS)
 def test_no_value_echoes_a_setting(stem, executed_notebook):
-    """A fraction that equals the thesis value and a constant the notebook set is the setting coming back."""
+    """A value that equals or nearly equals the thesis value and a constant the notebook set (and fed into
+    the computation), or a boolean that compares a result with the setting that produced it, is the
+    setting coming back: a settings-table entry, not a claim (CLAIMS.md)."""
     results = executed_notebook(stem)
-    constants = NotebookCode(NOTEBOOKS / f"{stem}.ipynb").scalar_constants()
+    code = NotebookCode(NOTEBOOKS / f"{stem}.ipynb")
     claims = CLAIMS.set_index("id")
+    reported = {r.claim: r for r in code.reported() if not r.generated}
     problems = []
     for cid, entry in sorted(results.items()):
-        value, claim = entry["value"], claims.loc[cid]
-        if (claim["basis"] != "computed" or claim["compare"] in ("true", "none") or isinstance(value, bool)
-                or not isinstance(value, float) or value.is_integer()):
+        claim = claims.loc[cid]
+        if claim["basis"] not in ("computed", "independent") or cid not in reported:
             continue
-        names = [n for n, c in constants.items() if c == value]
-        if names and value == float(claim["thesis_value"]):
-            problems.append(f"claim {cid}: the value {value} is the thesis value and the setting "
-                            f"{', '.join(names)} = {value} the notebook typed in (an echo of an input)")
+        why = code.echo(reported[cid], claim["thesis_value"], claim["compare"], entry["value"])
+        if why:
+            problems.append(f"claim {cid} ({claim['basis']}): {why} (an echo of an input)")
     _report(stem, problems)
 
 
@@ -203,6 +205,44 @@ def test_the_checker_resolves_what_the_notebook_calls(synthetic):
     assert synthetic.references(stats.design_from_f_dofs)
     assert synthetic.references(data.read_table)  # through the full dotted import
     assert not synthetic.references(stats.likert_vs_neutral)
+
+
+ECHOES = [
+    "quick = False\nexample_w_max = 0.75\nexample_mu = 0.5\nn_robots = 400",
+    textwrap.dedent("""\
+        from mutual.study import stats as st
+        sup = st.rm_anova(example_w_max, example_mu)
+        fit = st.rm_anova(sup, n_robots)
+        recovered = fit.w_max == example_w_max
+        close = abs(fit.mu - example_mu) < 0.05
+        rate = st.rm_anova(sup)
+        honest = rate <= 0.01
+        write_results("09_demo", {
+            "bool-echo": {"value": recovered}, "bool-close-echo": {"value": bool(close)},
+            "bool-np-echo": {"value": bool(st.np.isclose(fit.mu, example_mu))},
+            "bool-honest": {"value": honest}, "near-echo": {"value": fit.mu}, "far": {"value": rate},
+            "unrelated": {"value": st.rm_anova(3)}})"""),
+]
+
+
+@pytest.mark.parametrize("claim, value, thesis, rule, echo", [
+    ("bool-echo", True, "true", "true", True), ("bool-close-echo", True, "true", "true", True),
+    ("bool-np-echo", False, "true", "true", True), ("bool-honest", True, "true", "true", False),
+    ("near-echo", 0.503, "0.5", "abs:0.05", True), ("near-echo", 0.6, "0.5", "abs:0.05", False),
+    ("near-echo", 0.5, "0.5", ">=", True), ("far", 0.56, "0.5", "abs:0.05", False), ("far", 0.53, "0.5", "abs:0.05", True),
+    ("unrelated", 0.4975, "0.5", "abs:0.075", False), ("unrelated", 0.5, "0.5", "abs:0.075", True),
+    ("near-echo", 0.75, "0.29", "abs:0.05", False),
+])
+def test_the_checker_sees_echoes(tmp_path, claim, value, thesis, rule, echo):
+    """Booleans comparing a result with the setting that made it, and values that only nearly equal a
+    typed constant that fed them, are echoes; a value that merely sits near the thesis value is not."""
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(s) for s in ECHOES]
+    nb.cells[0].metadata["tags"] = ["parameters"]
+    nbformat.write(nb, tmp_path / "09_demo.ipynb")
+    code = NotebookCode(tmp_path / "09_demo.ipynb")
+    reported = {r.claim: r for r in code.reported()}
+    assert bool(code.echo(reported[claim], thesis, rule, value)) is echo
 
 
 def test_the_checker_refuses_claims_it_cannot_read(tmp_path):

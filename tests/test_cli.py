@@ -174,9 +174,12 @@ def test_supervisor_fit_recovers_a_fresh_simulated_supervisor(tmp_path):
     from mutual.supervision import NoisySupervisor, value_library, write_interventions
     from mutual.supervision import QUICK_GRID
     from mutual.supervision.supervisor import approach_scenes
+    from mutual.supervision.exact import exact_counterpart
     library = value_library([0.5, 1.0, 2.0], 1.0, QUICK_GRID, progress=False)
     rng = np.random.default_rng(5)
-    sup = NoisySupervisor(library[library.index_of(0.5)], 0.4, 0.03)
+    # the supervisor judges on its exact safe set, as the fit evaluates it; one simulated on the quick grid's
+    # interpolated values would carry the grid's error (about 0.09 in mu here) into its interventions
+    sup = NoisySupervisor(exact_counterpart(library[library.index_of(0.5)]), 0.4, 0.03)
     states, scene = sup.first_interventions(approach_scenes(60, rng, 1.0, 7.5), rng)
     frame = pd.DataFrame({"participant": "p-new", "trial": scene, "time": 1.0, "x": states[:, 0],
                           "y": states[:, 1], "theta": states[:, 2]})

@@ -176,7 +176,7 @@ def ran(tmp_path, monkeypatch):
     def write(mode="full"):
         for key, value in runs.kernel_env(notebook, {} if mode == "full" else {"quick": True}).items():
             monkeypatch.setenv(key, value)
-        write_results("09_demo", {"c2-alg3-equals-alg4": {"value": True, "note": "n", "computed_by":
+        write_results("09_demo", {"c2-thm231-recursion": {"value": True, "note": "n", "computed_by":
                                                           "mutual.study.stats.rm_anova"}})
         write_extensions("09_demo", {"k": {"statement": "s", "value": 1, "computed_by": "mutual.study.stats.rm_anova"}})
         return notebook
@@ -186,7 +186,7 @@ def ran(tmp_path, monkeypatch):
 
 def test_the_report_refuses_results_older_than_their_notebook(ran, capsys):
     notebook = ran()
-    assert "| c2-alg3-equals-alg4 |" in build_report().read_text()
+    assert "| c2-thm231-recursion |" in build_report().read_text()
     nb = nbformat.read(notebook, as_version=4)
     nb.cells[1].source = "x = 2"
     nbformat.write(nb, notebook)

@@ -10,7 +10,7 @@ import pytest
 from mutual.compendium.claims import VERDICTS
 from mutual.compendium.hygiene import committed_text, dirty_cells, filter_installed, staged_text
 from mutual.compendium.notebooks import declared_parameters
-from mutual.compendium.paths import NOTEBOOKS, results_dir
+from mutual.compendium.paths import NOTEBOOKS
 
 NOTEBOOK_PATHS = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
 IDS = [p.stem for p in NOTEBOOK_PATHS]
@@ -54,7 +54,7 @@ def test_library_does_the_work(path):
 def test_notebook_runs_quick(stem, executed_notebook):
     results = executed_notebook(stem)
     if not stem.startswith("00_"):
-        extensions = results_dir() / "extensions" / f"{stem}.json"
+        extensions = executed_notebook.folder / "results" / "extensions" / f"{stem}.json"
         assert results or extensions.exists(), f"{stem} wrote no results for the reproduction report"
 
 

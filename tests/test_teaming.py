@@ -47,7 +47,7 @@ def test_half_of_noisy_interventions_lie_in_the_learned_set(functions):
     sup = NoisySupervisor(_member(library, 0.5), 0.3, 0.05)
     table = phase2_interventions(sup, 400, rng)
     states = table[["x", "y", "theta"]].to_numpy()
-    fit = fit_supervisor(library, states)
+    fit = fit_supervisor(library, states, values="grid")  # the supervisor judged on the grid: read the same values
     frac, _ = fraction_inside(fit.value_fn, states, fit.mu)
     assert frac == pytest.approx(0.5, abs=0.08)
     true_frac, _ = fraction_inside(sup.value_fn, states, sup.mu)
@@ -109,7 +109,7 @@ def test_notebook_results(executed_notebook):
     assert res["c5-latin-square-balanced"]["value"] is True
     assert res["c5-tukey-learned-standard-p-from-table"]["value"] == pytest.approx(0.0328, abs=0.002)
     assert res["c5-learned-half-in-safe-set"]["simulated"]
-    assert 0.3 < res["c5-learned-half-in-safe-set"]["value"] < 0.7
+    assert res["c5-learned-half-in-safe-set"]["value"] is True    # the share is consistent with 1/2
     assert "c5-detection-probability" not in res                      # an echo of a setting, not a claim
     assert all(entry["computed_by"].startswith("mutual.") and entry["note"] for entry in res.values())
     assert res["c5-table51-predicted-learned-arith"]["value"] == pytest.approx(220 / 397)

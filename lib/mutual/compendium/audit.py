@@ -10,6 +10,7 @@ refers to a given library object. ``tests/test_claims_strict.py`` applies it to 
 
 import ast
 import importlib
+import math
 import re
 from collections import defaultdict
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ _PURE_BUILTINS = {"bool", "int", "float", "str", "round", "abs", "min", "max", "
                   "dict", "set", "sorted", "complex", "range", "zip", "enumerate", "reversed"}
 _PURE_MODULES = ("numpy", "math")
 _MAGIC = re.compile(r"^(\s*)[%!]")
+_CLOSE = {"isclose", "allclose", "array_equal"}
 
 
 class Unresolved(ValueError):
@@ -285,6 +287,83 @@ class NotebookCode:
             node = node.value
         if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load):
             return tuple([node.id] + names[::-1])
+        return None
+
+    # -- echoes of typed-in settings -----------------------------------------------------------
+    def names_feeding(self, node):
+        """Every name whose value flows into ``node``: the names it uses and, transitively, the names
+        their bindings and in-place changes use."""
+        seen, stack = set(), [node]
+        while stack:
+            current = stack.pop()
+            if current is None:
+                continue
+            for sub in ast.walk(current):
+                if isinstance(sub, ast.Name) and sub.id not in seen:
+                    seen.add(sub.id)
+                    stack.extend(b for b in self.bindings.get(sub.id, []) if b is not None)
+                    if sub.id not in self.imports:  # st.f(x) does not change the module st
+                        stack.extend(self.mutations.get(sub.id, []))
+        return seen
+
+    def _comparisons(self, node):
+        """The operands of the comparisons (``a == b``, ``np.isclose(a, b)``) and differences or ratios
+        (``abs(a - b) < tol``) that decide ``node``'s value, following names to what they are bound to."""
+        found, seen, stack = [], set(), [node]
+        while stack:
+            current = stack.pop()
+            for sub in ast.walk(current):
+                if isinstance(sub, ast.Compare):
+                    found.append([sub.left] + list(sub.comparators))
+                elif isinstance(sub, ast.BinOp) and isinstance(sub.op, (ast.Sub, ast.Div)):
+                    found.append([sub.left, sub.right])  # abs(a - b) < tol, a / b > 0.99
+                elif isinstance(sub, ast.Call) and getattr(sub.func, "attr", getattr(sub.func, "id", "")) in _CLOSE:
+                    found.append(list(sub.args[:2]))
+                elif isinstance(sub, ast.Name) and sub.id not in seen:
+                    seen.add(sub.id)
+                    stack.extend(b for b in self.bindings.get(sub.id, []) if b is not None)
+        return found
+
+    def echo(self, reported, thesis_value, rule, value):
+        """Why ``reported``'s ``value`` only gives back a setting the notebook typed in, or None.
+
+        A number is an echo when it equals (or, within the claim's tolerance -- 1% for a bound --
+        nearly equals) a named constant of the notebook that equals the thesis value and feeds the
+        value's computation (exact equality counts without the data flow). A boolean is an echo when
+        it compares a quantity with a named constant that also feeds that quantity (e.g. a fit's
+        ``w_max == example_w_max`` where ``example_w_max`` generated the data)."""
+        constants = self.scalar_constants()
+        if isinstance(value, bool):
+            for operands in self._comparisons(reported.value):
+                for i, operand in enumerate(operands):
+                    if not self.is_literal(operand):  # the setting itself (or constant arithmetic of it)
+                        continue
+                    typed = [n.id for n in ast.walk(operand) if isinstance(n, ast.Name) and n.id in constants]
+                    others = set().union(*(self.names_feeding(o) for j, o in enumerate(operands) if j != i))
+                    for name in typed:
+                        if name in others:
+                            return (f"it compares a quantity with {name} = {constants[name]}, a setting the notebook "
+                                    f"typed in that also produced that quantity (`{ast.unparse(operand)[:40]}`)")
+            return None
+        if not isinstance(value, (int, float)):
+            return None
+        try:
+            thesis = float(thesis_value)
+        except ValueError:
+            return None
+        kind, _, tol = rule.partition(":")
+        feeding = None
+        for name, c in sorted(constants.items()):
+            if c == 0 or not math.isclose(c, thesis, rel_tol=1e-9, abs_tol=1e-12):
+                continue  # a zero (an error, a rate) is a result, never a setting coming back
+            if value == c and not float(value).is_integer():
+                return f"the value {value} is the thesis value and the setting {name} = {c} the notebook typed in"
+            width = float(tol) * (abs(c) if kind == "rel" else 1) if kind in ("abs", "rel") else 0.01 * abs(c)
+            if abs(value - c) <= max(width, 1e-12):
+                feeding = self.names_feeding(reported.value) if feeding is None else feeding
+                if name in feeding:
+                    return (f"the value {value} nearly equals the setting {name} = {c} (the thesis value), which "
+                            "feeds its computation: the input coming back")
         return None
 
     def scalar_constants(self):

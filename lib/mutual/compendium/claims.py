@@ -1,6 +1,6 @@
 """The thesis's numeric and checkable claims (``data/paper_claims.csv``), the settings the
 thesis fixes (``data/paper_settings.csv``), and the rules that turn a computed value into a
-verdict a reader can trust (``../shared/CLAIMS.md`` in the project's words; the README repeats it).
+verdict a reader can trust (the README's "What reproduces" defines each verdict).
 
 Claim columns: ``id`` (``c<chapter>-<slug>``), ``chapter``, ``section``, ``lines`` (the thesis
 text's lines that state the claim), ``statement``, ``thesis_value``, ``compare``, ``basis`` and

@@ -1,8 +1,9 @@
 """One style and one saver for every figure and table of the compendium.
 
-Figures are named by their thesis number (``fig_3_1``) and saved as PDF and PNG,
-tables (``table_5_1``) as CSV and Markdown, all written atomically and with no
-metadata that changes between runs, so a rerun gives identical bytes.
+Figures are named by their thesis number (``fig_3_1``; our own figures of a chapter ``fig_3_lemma``, and
+of an extension beyond the thesis ``fig_ext_cycle_learn``, so that no name claims a thesis figure it is not)
+and saved as PDF and PNG, tables (``table_5_1``, ``table_ext_power_simulated``) as CSV and Markdown, all
+written atomically and with no metadata that changes between runs, so a rerun gives identical bytes.
 """
 
 import os
@@ -12,14 +13,15 @@ from ..atomic import atomic_path, write_text
 from ..style import CYCLE, PALETTE, use_style  # noqa: F401 (the notebooks' one import)
 from .paths import figures_dir, saved
 
-_NAME = re.compile(r"^(fig|table|anim)_[0-9]+_[a-z0-9_]+$")
+_NAME = re.compile(r"^(fig|table|anim)_([0-9]+|ext)_[a-z0-9_]+$")
 MAX_ANIMATION_BYTES = 2 * 1024 * 1024
 
 
 def _check_name(name, kind):
     if not _NAME.match(name) or not name.startswith(kind):
         raise ValueError(f"name {name!r} must look like '{kind}_<chapter>_<number>' (e.g. '{kind}_3_1'; "
-                         f"figures beyond the thesis's own: '{kind}_2_complexity')")
+                         f"figures beyond the thesis's own: '{kind}_2_complexity'; extensions beyond the thesis: "
+                         f"'{kind}_ext_<topic>_<name>')")
 
 
 def savefig(fig, name):

@@ -238,7 +238,7 @@ def state_action_visitation(mdp, mask=None):
     D = mdp.initial
     for t in range(mdp.horizon):
         occupancy[t] = D[:, None] * pi[t]
-        D = np.asarray(mdp.transitions.T @ occupancy[t].ravel())
+        D = _mdp._transpose_times(mdp, occupancy[t].ravel())
     return occupancy
 
 

@@ -108,3 +108,44 @@ def psi_star_by_loop(S, states, actions):
             for x in range(S.shape[0]):
                 psi[x] = max(psi[x], float(S[xs[t], a, x]))
     return np.array(psi)
+
+
+def threshold_levels(mdp, state):
+    """The thresholds at which a chance constraint on ``state`` changes what it allows: 0, every distinct
+    transition chance into the state, and 1 (inactive)."""
+    S = mdp.dense_transitions()[:, :, index_array(state, "state", mdp.n_states)[0]]
+    return np.unique(np.concatenate([[0.0, 1.0], S[S > 0]]))
+
+
+def lemma_321_exact(mdp, demos, states=None, base_mask=None):
+    """Lemma 3.2.1 on the exact likelihood: for each state, the demonstrations' log-likelihood (eq. 2.19,
+    :func:`~mutual.constraints.demonstrations.demonstration_log_likelihood`, one soft backup per threshold)
+    at every threshold a constraint on it can take (:func:`threshold_levels`).
+
+    Returns a DataFrame, one row per state with psi* < 1 (eq. 3.3): ``psi*``, ``lowest feasible`` (the
+    lowest threshold that keeps every demonstration possible -- above psi* when psi* leaves some state on a
+    demonstration's path without an allowed action), ``gain at lowest`` (nats per demonstration over the
+    unconstrained C0, psi = 1), the threshold with the largest likelihood (``best psi``, ``best gain``) and
+    ``holds``: the likelihood is largest at the lowest feasible threshold, to 1e-12 nats (the lemma)."""
+    import pandas as pd
+
+    from .demonstrations import demonstration_log_likelihood
+
+    base = np.ones((mdp.n_states, mdp.n_actions), dtype=bool) if base_mask is None else np.asarray(base_mask)
+    psi_star = max_likelihood_thresholds(mdp, demos)
+    states = np.arange(mdp.n_states) if states is None else index_array(states, "states", mdp.n_states)
+    ll0 = demonstration_log_likelihood(mdp, demos, base)
+    rows = []
+    for x in states:
+        if psi_star[x] >= 1:
+            continue
+        levels = threshold_levels(mdp, x)
+        levels = levels[levels >= psi_star[x] - 1e-15]
+        gains = np.array([(demonstration_log_likelihood(mdp, demos, base & constraint_mask(mdp, [x], psi)) - ll0)
+                          / demos.n for psi in levels])
+        feasible = np.flatnonzero(np.isfinite(gains))
+        lowest, best = feasible[0], feasible[np.argmax(gains[feasible])]
+        rows.append({"state": int(x), "psi*": float(psi_star[x]), "lowest feasible": float(levels[lowest]),
+                     "gain at lowest": float(gains[lowest]), "best psi": float(levels[best]),
+                     "best gain": float(gains[best]), "holds": bool(gains[lowest] >= gains[best] - 1e-12)})
+    return pd.DataFrame(rows)

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import mdp as mdp_module
 from .chance import chance_forbidden
-from .backup import constraint_accrual, log_partition, value_ratio
+from .backup import constraint_accrual, expected_features, log_partition, value_ratio
 from .gridworld import gridworld
 
 
@@ -76,15 +76,18 @@ def all_single_candidates(mdp):
 def gridworld_ranking(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4, engine="numpy",
                       loiter="goal"):
     """A call that ranks the first ``n_candidates`` (default all X + A) single candidates
-    on a ``side`` x ``side`` gridworld by Algorithm 4 (``algorithm=4``, on ``engine``) or 3. The
+    on a ``side`` x ``side`` gridworld by Algorithm 4 (``algorithm=4``, on ``engine``), 3 or 2, or that
+    computes Algorithm 1's gradient with them as features (``algorithm=1``). The
     multiply-add counts of :func:`counting_multiply_adds` watch the numpy engine's products."""
-    if algorithm not in (2, 3, 4):
-        raise ValueError(f"algorithm: must be 2, 3 or 4, got {algorithm!r}")
+    if algorithm not in (1, 2, 3, 4):
+        raise ValueError(f"algorithm: must be 1, 2, 3 or 4, got {algorithm!r}")
     g = gridworld(side, side, (0, 0), (side - 1, 0), slip=slip, horizon=horizon, sparse=sparse, loiter=loiter)
     masks = all_single_candidates(g.mdp)[:, :, :n_candidates]
     if algorithm == 4:
         return lambda: log_partition(g.mdp, masks, engine=engine)
     full = np.ones(masks.shape[:2], dtype=bool)
+    if algorithm == 1:      # Ziebart's gradient (eq. 2.8): one backup and one forward pass, the candidates as features
+        return lambda: expected_features(g.mdp, (~masks).astype(float))
     if algorithm == 2:
         return lambda: constraint_accrual(g.mdp, full, masks)
     return lambda: value_ratio(g.mdp, full, masks)
@@ -92,7 +95,7 @@ def gridworld_ranking(side, n_candidates=None, sparse=False, slip=0.1, horizon=2
 
 def gridworld_ranking_work(side, n_candidates=None, sparse=False, slip=0.1, horizon=20, algorithm=4):
     """Multiply-adds (:func:`counting_multiply_adds`) of one :func:`gridworld_ranking` run
-    (Algorithm 2, 3 or 4 on the numpy engine)."""
+    (Algorithm 1, 2, 3 or 4 on the numpy engine)."""
     run = gridworld_ranking(side, n_candidates, sparse, slip, horizon, algorithm)
     with counting_multiply_adds() as tally:
         run()

@@ -61,14 +61,25 @@ class Chapter3:
         return relevant, upper, relevant + upper
 
 
-def chapter3(layout="first", slip=SLIP, loiter="goal", start=START, goal=GOAL, horizon=None, sparse=False):
+def scaled_cell(cell, width):
+    """A cell of the 9 x 9 layout moved onto a ``width`` x ``width`` grid (each coordinate scaled by
+    (width - 1) / 8 and rounded half up): the same places relative to the grid, for the grid-size scan."""
+    return tuple(int(np.floor(v * (width - 1) / (WIDTH - 1) + 0.5)) for v in cell)
+
+
+def chapter3(layout="first", slip=SLIP, loiter="goal", start=START, goal=None, horizon=None, sparse=False,
+             reward_scale=1.0, width=WIDTH):
     """The experiment's set-up for ``layout`` ("first": the result; "second": the moved cell),
-    optionally with another ``slip``, ``loiter`` rule, task (``start``, ``goal``) or ``horizon``."""
+    optionally with another ``slip``, ``loiter`` rule, task (``start``, ``goal``; default the bottom
+    right corner), ``horizon``, ``reward_scale`` (the demonstrator's inverse temperature) or grid
+    ``width`` (the 9 x 9 layout scaled by :func:`scaled_cell`)."""
     if layout not in LAYOUTS:
         raise ValueError(f"layout: must be one of {sorted(LAYOUTS)}, got {layout!r}")
-    grid = gridworld(WIDTH, WIDTH, start, goal, slip=slip, horizon=horizon, sparse=sparse, loiter=loiter)
-    bottom = grid.state(*BOTTOM_MIDDLE)
-    upper = tuple(grid.state(*c) for c in LAYOUTS[layout])
+    goal = scaled_cell(GOAL, width) if goal is None else goal
+    grid = gridworld(width, width, start, goal, slip=slip, horizon=horizon, sparse=sparse, loiter=loiter,
+                     reward_scale=reward_scale)
+    bottom = grid.state(*scaled_cell(BOTTOM_MIDDLE, width))
+    upper = tuple(grid.state(*scaled_cell(c, width)) for c in LAYOUTS[layout])
     actions = tuple(GRID_ACTIONS.index(a) for a in TRUTH_ACTIONS)
     truth = constraint_mask(grid.mdp, (bottom,) + upper, PSI_TRUTH, actions)
     return Chapter3(grid, truth, bottom, upper, actions, layout)

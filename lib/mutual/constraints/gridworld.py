@@ -94,7 +94,8 @@ def miss_penalty_limit(horizon):
     return MAX_VALUE - horizon * float(np.sqrt(2))
 
 
-def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=50.0, sparse=False, loiter="goal"):
+def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=50.0, sparse=False, loiter="goal",
+              reward_scale=1.0):
     """The thesis's gridworld (Section 3.3).
 
     Actions: the eight compass moves ``GRID_ACTIONS[:8]`` and ``loiter``. A move
@@ -111,6 +112,8 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
     the agent minimises the distance it travels. Terminal reward: 0 at the goal and
     -``miss_penalty`` (>= 0) elsewhere, so the agent must reach the goal within
     ``horizon`` steps (default 2 max(W, H), room for a detour around a constraint).
+    ``reward_scale`` (> 0) multiplies both rewards: the inverse temperature of the Boltzmann
+    demonstrator (eq. 2.19), which the thesis does not state (1: unit temperature).
     The agent starts at ``start``; positions are (col, row), row 0 at the bottom.
     """
     width, height = _integer("width", width, 2), _integer("height", height, 2)
@@ -122,6 +125,10 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
             np.isfinite(miss_penalty) and miss_penalty >= 0):
         raise ValueError(f"miss_penalty: must be a finite number >= 0 (a penalty for missing the goal), "
                          f"got {miss_penalty!r}")
+    if isinstance(reward_scale, bool) or not isinstance(reward_scale, numbers.Real) or not (
+            np.isfinite(reward_scale) and reward_scale > 0):
+        raise ValueError(f"reward_scale: must be a finite number > 0 (the demonstrator's inverse temperature), "
+                         f"got {reward_scale!r}")
     if loiter not in LOITER_RULES:
         raise ValueError(f"loiter: must be one of {LOITER_RULES}, got {loiter!r}")
     horizon = 2 * max(width, height) if horizon is None else _integer("horizon", horizon, 1)
@@ -144,9 +151,9 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
     vals = np.concatenate([prob.ravel(), np.ones(X)])
     keep = vals > 0
     P = sp.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(X * A, X))
-    reward = -np.broadcast_to(np.hypot(GRID_DELTAS[:, 0], GRID_DELTAS[:, 1]), (X, A))
+    reward = -float(reward_scale) * np.broadcast_to(np.hypot(GRID_DELTAS[:, 0], GRID_DELTAS[:, 1]), (X, A))
     g = goal[0] + width * goal[1]
-    w = np.full(X, -float(miss_penalty))
+    w = np.full(X, -float(miss_penalty) * float(reward_scale))
     w[g] = 0.0
     p0 = np.zeros(X)
     p0[start[0] + width * start[1]] = 1.0

@@ -28,7 +28,7 @@ class InferenceResult:
     or -- with pruning -- not scored because its bound could not win), ``gain[i]`` (K,) their
     exact per-demonstration log-likelihood gains, ``mask`` the final constraint mask Phi_C
     (constraints only; each MDP's unavailable actions are added by the backups), ``stop`` why
-    the run ended ("rounds", "min_gain" or "no feasible candidate") and ``scored[i]`` how many
+    the run ended ("rounds", "min_gain", "no feasible candidate" or "until") and ``scored[i]`` how many
     candidates were scored exactly in round i (the last entry: the round that stopped it)."""
 
     chosen: list
@@ -158,7 +158,7 @@ def _pruned_round(tasks, candidates, idx, mask, floor, engine, first=32):
 
 
 def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=None, criterion="F", prune=False,
-                     engine="auto", on_round=None):
+                     engine="auto", on_round=None, until=None):
     """Greedy iterative constraint inference (Section 2.4, after Scobee and Sastry).
 
     Each round scores every feasible, not yet chosen candidate by Algorithm 4 and adds
@@ -179,6 +179,8 @@ def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=No
     ``engine`` as in :func:`mutual.constraints.backup.log_partition`. ``on_round``, if given, is
     called after each round is scored as ``on_round(i, log_f, gain, best)`` (``best``: the candidate
     added, or None when this round ends inference): for progress, and to see the refused round.
+    ``until``: a function of the list of chosen candidates that ends inference (``result.stop ==
+    "until"``) once it returns True.
     """
     tasks = as_tasks(mdp, demos)
     _check_inputs(tasks, candidates, rounds, min_gain, criterion, prune, engine)
@@ -212,6 +214,9 @@ def greedy_inference(mdp, demos, candidates, rounds, min_gain=None, base_mask=No
         gains.append(gain)
         mask &= ~candidates.forbidden_matrix[:, best].toarray().reshape(mask.shape)
         available[best] = False
+        if until is not None and until(chosen):
+            stop = "until"
+            break
     return InferenceResult(chosen, history, gains, mask, stop, scored)
 
 

@@ -81,7 +81,7 @@ def draw_round(ax_states, ax_actions, grid, candidates, result, i, truth_states=
     states, actions = candidates.kind == "state", candidates.kind == "action"
     F = np.exp(result.log_f[i])
     before, chosen = result.chosen[:i], result.chosen[i]
-    title = f"round {i + 1}: {candidate_name(grid, candidates, chosen)}\nF = {F[chosen]:.2f}"
+    title = f"round {i + 1}: {candidate_name(grid, candidates, chosen)}\nF = {F[chosen]:.3f}"
     im = plot_states(ax_states, grid, F[states], crosses=[candidates.index[k] for k in before if states[k]],
                      title=title)
     plot_actions(ax_actions, F[actions], crosses=[candidates.index[k] for k in before if actions[k]])
@@ -98,11 +98,47 @@ def draw_round(ax_states, ax_actions, grid, candidates, result, i, truth_states=
     return im
 
 
-def inference_panels(grid, candidates, result, rounds, truth_states=(), truth_actions=(), title=None):
+def gain_panel(ax, result, truth=(), thesis_F=0.96):
+    """The likelihood gain -log F of each round's choice on a log axis (Figure 3.3's "the continued scaling
+    shrinks by an order of magnitude and then effectively halts as F retracts"), each point labelled with its
+    F to three decimals; ground-truth choices in red; the thesis's F = ``thesis_F`` as a dashed line."""
+    gains = -np.log(result.F)
+    rounds = np.arange(1, len(gains) + 1)
+    true = np.array([k in truth for k in result.chosen])
+    ax.semilogy(rounds, gains, color="0.5", lw=1)
+    ax.semilogy(rounds[true], gains[true], "o", color=PALETTE["vermillion"], label="ground truth")
+    ax.semilogy(rounds[~true], gains[~true], "s", color=PALETTE["blue"], label="untrue")
+    for r, g, F in zip(rounds, gains, result.F):
+        ax.annotate(f"F = {F:.3f}", (r, g), textcoords="offset points", xytext=(4, 4), fontsize=6)
+    ax.axhline(-np.log(thesis_F), color="0.4", ls="--", lw=0.8)
+    ax.text(rounds[0], -np.log(thesis_F) * 1.15, f"thesis: F = {thesis_F:g}", fontsize=6, color="0.3")
+    ax.set(xlabel="round", ylabel="gain -log F (nats per demonstration)", xticks=rounds)
+    ax.legend(fontsize=6, loc="upper right")
+    return ax
+
+
+def inference_panels(grid, candidates, result, rounds, truth_states=(), truth_actions=(), title=None, truth=None):
     """One column per round in ``rounds``: states (top) and actions (bottom) shaded by F
-    (:func:`draw_round`). Returns a ``Figure``."""
+    (:func:`draw_round`). With ``truth`` (the ground truth's candidate ids) a last column shows every round's
+    gain -log F (:func:`gain_panel`). Returns a ``Figure``."""
     rounds = list(rounds)
+    if truth is not None:
+        fig = Figure(figsize=(2.2 * max(len(rounds), 1) + 3.6, 4.0), layout="constrained")
+        panels, side = fig.subfigures(1, 2, width_ratios=[2.2 * max(len(rounds), 1) + 0.8, 2.8])
+        gain_panel(side.subplots(), result, truth)
+        inference_panels_into(panels, grid, candidates, result, rounds, truth_states, truth_actions)
+        if title:
+            fig.suptitle(title, fontsize=9)
+        return fig
     fig = Figure(figsize=(2.2 * max(len(rounds), 1) + 0.8, 4.0), layout="constrained")
+    inference_panels_into(fig, grid, candidates, result, rounds, truth_states, truth_actions)
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return fig
+
+
+def inference_panels_into(fig, grid, candidates, result, rounds, truth_states=(), truth_actions=()):
+    """The panels of :func:`inference_panels` drawn into ``fig`` (a Figure or SubFigure)."""
     axes = fig.subplots(2, max(len(rounds), 1), gridspec_kw={"height_ratios": [3, 1.3]}, squeeze=False)
     im = None
     for j, i in enumerate(rounds):
@@ -111,8 +147,6 @@ def inference_panels(grid, candidates, result, rounds, truth_states=(), truth_ac
             axes[0, j].set_ylabel("")
     if im is not None:
         fig.colorbar(im, ax=axes[0, :].tolist(), shrink=0.8, label="F = Z$_{C+}$/Z$_{C0}$ (grey: infeasible or chosen)")
-    if title:
-        fig.suptitle(title, fontsize=9)
     return fig
 
 

@@ -83,7 +83,7 @@ def continuous_view(n_interventions=40, k=2.0, seed=0, n_robots=60):
     library, standard, conservative = _library()
     supervisor = NoisySupervisor(library[library.index_of(0.75)], 0.5, 0.1)
     states = collect_interventions(supervisor, int(n_interventions), np.random.default_rng([seed, 40]), 7.5)
-    fit = fit_supervisor(library, states)
+    fit = fit_supervisor(library, states, values="grid")  # the supervisor above judges on the grid's values
     fp = false_positive_study(supervisor, {"learned": (fit.value_fn, fit.level(k)), "standard": (standard, 0.0),
                                            "conservative": (conservative, 0.0)}, n_robots, np.random.default_rng(seed), 7.5)
     fig = Figure(figsize=(8.5, 3.3))

@@ -114,7 +114,7 @@ def _supervisor_panel(ax, interventions, fit, supervisor, k=2.0):
 
 
 def sample_efficiency_figure(summary):
-    """Fig. 8.2: precision and recall, the training log-likelihood gap to the truth and the held-out
+    """`fig_ext_cycle_learn`: precision and recall, the training log-likelihood gap to the truth and the held-out
     demonstrations the inferred constraints allow, against N (means over seeds, 95% bootstrap CIs)."""
     fig = Figure(figsize=(10, 3.6), layout="constrained")
     axes = fig.subplots(1, 3)
@@ -138,7 +138,7 @@ def sample_efficiency_figure(summary):
 
 
 def act_figure(robots, blind):
-    """Fig. 8.3: exact outcomes of each robot in task 2, and recall of task 2's constraints when
+    """`fig_ext_cycle_act`: exact outcomes of each robot in task 2, and recall of task 2's constraints when
     inferring from task 1 alone or pooled with task 2 (means over seeds, 95% bootstrap CIs)."""
     fig = Figure(figsize=(9, 3.2), layout="constrained")
     ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.5, 1]})
@@ -159,7 +159,7 @@ def act_figure(robots, blind):
 
 
 def observer_figure(curves, horizon, level, sweep):
-    """Fig. 8.4: the observer's mean posterior over repeated episodes, the share of observers confident
+    """`fig_ext_cycle_show`: the observer's mean posterior over repeated episodes, the share of observers confident
     by each step, and the exact trade-off of legibility against reward over alpha."""
     fig = Figure(figsize=(10.5, 3.4), layout="constrained")
     axes = fig.subplots(1, 3)
@@ -190,7 +190,7 @@ def observer_figure(curves, horizon, level, sweep):
 
 
 def evidence_figure(paths, posteriors, dt, crossing, radius, level_sets, title="Evident safety for the supervisor (simulated)"):
-    """Fig. 8.6: the iLQR paths of H0, H1 and the legible robot around the obstacle with the boundaries of
+    """`fig_ext_cycle_evident_first`: the iLQR paths of H0, H1 and the legible robot around the obstacle with the boundaries of
     the unsafe sets ``{label: (w_max, level)}`` for a car heading east (+x), and the supervisor's posterior
     (the moment an ignorant robot reaches the supervisor's level, ``crossing``, is drawn when finite)."""
     fig = Figure(figsize=(9.5, 3.4), layout="constrained")
@@ -218,7 +218,7 @@ def evidence_figure(paths, posteriors, dt, crossing, radius, level_sets, title="
 
 
 def supervision_figure(interventions, fit, supervisor, fp, refits):
-    """Fig. 8.5: the supervisor's interventions and fitted safe set; false-positive probabilities of
+    """`fig_ext_cycle_supervision`: the supervisor's interventions and fitted safe set; false-positive probabilities of
     each controller (95% bootstrap CI over robots) and of the learned robot refitted per seed."""
     fig = Figure(figsize=(10.5, 3.4), layout="constrained")
     ax, bx, cx = fig.subplots(1, 3, gridspec_kw={"width_ratios": [1.2, 1, 1]})

@@ -103,7 +103,7 @@ def learned_false_positives(library, supervisor, n_interventions, seeds, n_robot
     rows = []
     for seed in seeds:
         states = collect_interventions(supervisor, n_interventions, np.random.default_rng([seed, 40]), start_distance)
-        fit = fit_supervisor(library, states)
+        fit = fit_supervisor(library, states, values="grid")  # the simulated supervisor judges on the grid's values
         fp = false_positive_study(supervisor, {"learned": (fit.value_fn, fit.level(k))}, n_robots,
                                   np.random.default_rng(scene_seed), start_distance, dt)
         rows.append({"seed": seed, "w_max_hat": fit.w_max, "mu_hat": fit.mu, "sigma_hat": fit.sigma,

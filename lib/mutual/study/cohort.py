@@ -115,11 +115,16 @@ def estimator_recovery(library, w_maxes, mu, sigmas, n_scenes=40, repeats=10, se
     for w in w_maxes:
         for sigma in sigmas:
             sup = NoisySupervisor(library[library.index_of(w)], mu, sigma)
-            fits = [fit_supervisor(library, phase2_interventions(sup, n_scenes, rng)[["x", "y", "theta"]].to_numpy()).w_max
-                    for _ in range(repeats)]
+            fits = [fit_supervisor(library, phase2_interventions(sup, n_scenes, rng)[["x", "y", "theta"]].to_numpy(),
+                                   values=_same_values(library)).w_max for _ in range(repeats)]
             rows.append({"true w_max": w, "sigma": sigma, "recovered": float(np.mean(np.isclose(fits, w))),
                          "mean fitted w_max": float(np.mean(fits))})
     return pd.DataFrame(rows)
+
+
+def _same_values(library):
+    """Fit on the values the simulated supervisors judge with: exact for an exact library, else the grid's."""
+    return "exact" if library.members[0].exact else "grid"
 
 
 def learned_set_cluster(w_max, mu, gradual_below=0.75, conservative_from=0.5):
@@ -171,10 +176,32 @@ def avoidance_onset(value, level=0.0, resolution=1601):
     return float(-(xs[i - 1] + frac * (xs[i] - xs[i - 1])))
 
 
-def study_value_functions(quick=False, progress=False):
+def late_intervention_bound(participants, interventions):
+    """The noisy idealized supervisor's bound on interventions inside the Standard reachable set (Fig. 5.6):
+    a conservative supervisor (eq. 4.4, V_S <= V) intervenes at V_S = mu - w, so an intervention can lie in
+    {V < 0} only if w > mu: at most sum_i n_i Phi(-mu_i / sigma_i) over the ``participants`` (columns
+    participant, mu, sigma) with their counts in ``interventions``. Returns (expected bound, per-person table)."""
+    from scipy import stats
+
+    counts = interventions.groupby("participant").size()
+    people = participants.set_index("participant").loc[counts.index]
+    share = stats.norm.cdf(-people["mu"] / people["sigma"])
+    table = pd.DataFrame({"interventions": counts, "mu / sigma": people["mu"] / people["sigma"],
+                          "P(w > mu)": share, "expected inside Standard (at most)": counts * share})
+    return float(table["expected inside Standard (at most)"].sum()), table
+
+
+def study_value_functions(quick=False, progress=False, exact=False):
     """The supervisor library over ``STUDY_W_MAXES`` (obstacle radius 1) and the Conservative value
-    function (true dynamics, obstacle radius doubled), on the quick or full grid (disk-cached)."""
+    function (true dynamics, obstacle radius doubled), on the quick or full grid (disk-cached). With
+    ``exact`` both are the closed form evaluated exactly at every state
+    (:class:`mutual.supervision.exact.ExactValueFunction`): no HJ solve, no interpolation error."""
     grid = QUICK_GRID if quick else FULL_GRID
+    if exact:
+        from ..supervision.exact import exact_library, exact_value_function
+
+        return (exact_library(STUDY_W_MAXES, OBSTACLE_RADIUS, grid),
+                exact_value_function(TRUE_W_MAX, 2 * OBSTACLE_RADIUS, grid))
     library = value_library(STUDY_W_MAXES, OBSTACLE_RADIUS, grid_spec=grid, progress=progress)
     conservative = avoid_value_function(TRUE_W_MAX, 2 * OBSTACLE_RADIUS, grid_spec=grid, progress=progress)
     return library, conservative
@@ -241,7 +268,7 @@ def simulate_study(library, conservative, n_scenes=40, config=TeamingConfig(), s
         table = phase2_interventions(sup, n_scenes, rng).assign(participant=pid)
         states = table[["x", "y", "theta"]].to_numpy()
         try:
-            fit = fit_supervisor(library, states, prior="mle")
+            fit = fit_supervisor(library, states, prior="mle", values=_same_values(library))
         except ValueError as err:
             raise ValueError(f"simulated recruit {pid} ({len(states)} interventions in {n_scenes} scenes) cannot "
                              f"be fitted: {err}") from None

@@ -21,6 +21,7 @@ from ..supervision.dubins import TRUE_W_MAX, dubins_step, wrap_angle
 from ..supervision.reachability import ValueFunction
 from ..supervision.supervisor import NoisySupervisor
 from .design import OBSTACLE_RADIUS
+from .value_stack import _Stack, _unique
 
 
 @dataclass(frozen=True, repr=False)
@@ -153,62 +154,6 @@ def _relocate(rng, config, others, robots):
     return pool[np.argmax(far)]
 
 
-class _Stack:
-    """Value functions on one grid, interpolated together: trial ``b`` uses ``functions[which[b]]``.
-
-    The same trilinear interpolation as :meth:`ValueFunction.interp` (periodic in theta,
-    ``fill_value`` off the (x, y) domain), done for every trial in one gather.
-    """
-
-    def __init__(self, functions, which, role):
-        specs = {f.grid_spec for f in functions}
-        if len(specs) != 1:
-            raise ValueError(f"all {role} value functions must share one grid_spec, got {len(specs)} different grids")
-        self.spec = specs.pop()
-        self.size = int(np.prod(self.spec.shape))
-        self.values = np.concatenate([f.values.ravel() for f in functions])
-        self.dtheta = np.concatenate([f.dvalues_dtheta.ravel() for f in functions])
-        self.offset = np.asarray(which) * self.size
-
-    def interp(self, states, fill_value=np.inf, derivative=False, rows=None):
-        """V (or dV/dtheta) of each trial's function at ``states`` (B, ..., 3); ``rows`` selects trials."""
-        offset = self.offset if rows is None else self.offset[rows]
-        offset = np.broadcast_to(offset.reshape(offset.shape + (1,) * (states.ndim - 2)), states.shape[:-1])
-        inside = (np.abs(states[..., 0]) <= self.spec.half_width) & (np.abs(states[..., 1]) <= self.spec.half_width)
-        out = np.full(states.shape[:-1], fill_value, dtype=float)
-        where = np.nonzero(inside)          # only states on the grid (most robot-obstacle pairs are far apart)
-        s, offset = states[where], offset[where]
-        nx, ny, nt = self.spec.shape
-        pos = (s - self.spec.lo) / self.spec.spacings
-        ix = np.clip(pos[:, 0].astype(np.intp), 0, nx - 2)
-        iy = np.clip(pos[:, 1].astype(np.intp), 0, ny - 2)
-        it = np.floor(pos[:, 2]).astype(np.intp)
-        wx, wy, wt = pos[:, 0] - ix, pos[:, 1] - iy, pos[:, 2] - it
-        it0, it1 = it % nt, (it + 1) % nt
-        table = self.dtheta if derivative else self.values
-        result = 0.0
-        for dx, fx in ((0, 1 - wx), (1, wx)):
-            for dy, fy in ((0, 1 - wy), (1, wy)):
-                base = offset + ((ix + dx) * ny + iy + dy) * nt
-                result = result + fx * fy * ((1 - wt) * table[base + it0] + wt * table[base + it1])
-        out[where] = result
-        return out
-
-
-def _unique(objects):
-    """Distinct objects (by identity) and each item's index among them."""
-    uniq, index = [], []
-    for o in objects:
-        for i, u in enumerate(uniq):
-            if u is o:
-                index.append(i)
-                break
-        else:
-            uniq.append(o)
-            index.append(len(uniq) - 1)
-    return uniq, np.array(index)
-
-
 @dataclass
 class _Batch:
     """The mutable state of a batch of Phase III trials (B trials, R robots, O obstacles)."""
@@ -220,6 +165,7 @@ class _Batch:
     detected: np.ndarray        # (B, R, O) this trip's detections
     threshold: np.ndarray       # (B, R, O) supervisor's judgement level for the current approach
     was_near: np.ndarray        # (B, R, O)
+    placed_inside: np.ndarray   # (B, R, O) the obstacle reappeared with the robot already inside {V_S < mu}
     latched: np.ndarray         # (B, R) obstacle being avoided, or -1
     turn: np.ndarray            # (B, R) the avoid control while latched
     counts: dict
@@ -233,8 +179,10 @@ def _start_batch(versions, config, rng):
     return _Batch(robots=robots, obs=np.stack([l[0] for l in layouts]), goal_x=goal_x,
                   goal_y=rng.uniform(2.0, config.height - 2.0, (n, R)), origin_x=config.width - goal_x,
                   detected=rng.random((n, R, O)) < config.detection_prob, threshold=np.full((n, R, O), -np.inf),
-                  was_near=np.zeros((n, R, O), bool), latched=np.full((n, R), -1), turn=np.zeros((n, R)),
+                  was_near=np.zeros((n, R, O), bool), placed_inside=np.zeros((n, R, O), bool),
+                  latched=np.full((n, R), -1), turn=np.zeros((n, R)),
                   counts={k: np.zeros(n, int) for k in ("trips", "interventions", "collisions", "false_positives",
+                                                        "unavoidable_false_positives",
                                                         "encounters", "detected_encounters")})
 
 
@@ -285,16 +233,21 @@ def _supervise(b, sups, config, rng):
         b.counts["encounters"] += fresh.sum(axis=(1, 2))
         b.counts["detected_encounters"] += (fresh & b.detected).sum(axis=(1, 2))
     b.was_near = near
+    b.placed_inside &= near
     trigger = near & (stack.interp(rel) <= b.threshold)
     removed = list(zip(*np.nonzero(trigger.any(axis=1))))
     for t, o in removed:
         involved = near[t, :, o] | trigger[t, :, o]
+        false_positive = bool(np.all(b.detected[t, involved, o]))
         b.counts["interventions"][t] += 1
-        b.counts["false_positives"][t] += bool(np.all(b.detected[t, involved, o]))
+        b.counts["false_positives"][t] += false_positive
+        b.counts["unavoidable_false_positives"][t] += false_positive and bool(b.placed_inside[t, involved, o].any())
         b.obs[t, o] = _relocate(rng, config, np.delete(b.obs[t], o, axis=0), b.robots[t, :, :2])
         b.detected[t, :, o] = rng.random(b.detected.shape[1]) < config.detection_prob
         b.was_near[t, :, o] = False
         b.latched[t, b.latched[t] == o] = -1
+        moved = _relative(b.robots[t:t + 1], b.obs[t:t + 1, o:o + 1])[0, :, 0]
+        b.placed_inside[t, :, o] = stack.interp(moved[None], rows=np.array([t]))[0] < mu[t, 0, 0]
     return removed
 
 
@@ -317,13 +270,15 @@ def _end_trips(b, config, rng):
         b.latched = np.where(renew, -1, b.latched)
 
 
-def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=0, record=None):
+def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=0, record=None, details=False):
     """Run a batch of Phase III trials (one per ``teams[i]``, ``supervisors[i]``, ``versions[i]``).
 
     Returns a DataFrame with one row per trial and columns trips, interventions, collisions,
     false_positives, score, and encounters / detected_encounters (robot-obstacle approaches
     within ``near_distance``, and those with the obstacle detected); with ``record=i`` also a
-    :class:`TeamingRecord` of trial ``i``.
+    :class:`TeamingRecord` of trial ``i``. With ``details`` also ``unavoidable_false_positives``: false
+    positives on an obstacle that reappeared (after a removal) with a robot already inside the supervisor's
+    unsafe set ``{V_S < mu}``, which no controller could have avoided (the Property's premise fails there).
     """
     teams, supervisors, versions = list(teams), list(supervisors), list(versions)
     n = len(teams)
@@ -365,7 +320,10 @@ def simulate_teaming(teams, supervisors, versions, config=TeamingConfig(), seed=
                 rec.robots.append(b.robots[record].copy())
                 rec.obstacles.append(b.obs[record].copy())
                 rec.detected.append(b.detected[record].copy())
+    unavoidable = b.counts.pop("unavoidable_false_positives")
     out = pd.DataFrame(b.counts)
+    if details:
+        out["unavoidable_false_positives"] = unavoidable
     out["score"] = (config.trip_reward * out["trips"] - config.collision_cost * out["collisions"]
                     - config.removal_cost * out["interventions"])
     return (out, rec) if record is not None else out
@@ -381,9 +339,10 @@ def _relative(robots, obstacles):
 def perfect_fit_trials(supervisors, versions, config=TeamingConfig(), seed=0):
     """The Property of Sec. 4.5: each supervisor, made noiseless, watches a team avoiding on that
     supervisor's own safe set ``{V_S >= mu}`` (a perfect fit), once per task version; returns the
-    per-trial counts of :func:`simulate_teaming` (false positives should be zero, up to the grid's
-    value error, which ``config.filter_margin`` absorbs)."""
+    per-trial counts of :func:`simulate_teaming` with ``unavoidable_false_positives`` (false positives should
+    be zero on exact values, except on obstacles that reappear with a robot already inside the supervisor's
+    unsafe set; on the grid's values the interpolation error adds more, which ``config.filter_margin`` absorbs)."""
     pairs = [(s, v) for s in supervisors for v in versions]
     teams = [Team(s.value_fn, s.mu) for s, _ in pairs]
     noiseless = [NoisySupervisor(s.value_fn, s.mu, 0.0) for s, _ in pairs]
-    return simulate_teaming(teams, noiseless, [v for _, v in pairs], config, seed)
+    return simulate_teaming(teams, noiseless, [v for _, v in pairs], config, seed, details=True)

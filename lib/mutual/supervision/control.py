@@ -79,6 +79,21 @@ def wilson_interval(rates, n, confidence=0.95):
     return np.array([i.low for i in ci]), np.array([i.high for i in ci])
 
 
+def binomial_consistent(rates, n, expected, level=1e-4):
+    """Whether each observed rate (a fraction of ``n`` independent trials) is consistent with its
+    ``expected`` probability: a two-sided exact binomial test does not reject at ``level`` (bool array).
+    The check of a simulation against the noise model it simulates (a wrong result fails; a right one
+    fails with probability ``level`` per rate)."""
+    from scipy import stats
+
+    n = _check_count("n", n)
+    r, p = np.broadcast_arrays(np.atleast_1d(np.asarray(rates, dtype=float)),
+                               np.atleast_1d(np.asarray(expected, dtype=float)))
+    if not np.all((r >= 0) & (r <= 1) & (p >= 0) & (p <= 1)):
+        raise ValueError(f"rates and expected must be fractions in [0, 1], got {r.tolist()} and {p.tolist()}")
+    return np.array([stats.binomtest(int(round(x * n)), n, q).pvalue >= level for x, q in zip(r, p)])
+
+
 def needs_override(value_fn, states, alpha, obstacles=None):
     """Whether each robot is at or below the ``alpha`` level of ``value_fn`` (bool (n,))."""
     _, v = _obstacle_frame(value_fn, states, obstacles)

@@ -114,13 +114,24 @@ def avoid_value_closed_form(states, w_max, radius, speed=SPEED, tol=1e-9):
     _check_positive("radius", radius)
     _check_positive("speed", speed)
     s = check_states(states)
-    big_r = speed / w_max
-    p = s[:, :2]
-    heading = np.stack([np.cos(s[:, 2]), np.sin(s[:, 2])], axis=1)
-    normal = np.stack([-np.sin(s[:, 2]), np.cos(s[:, 2])], axis=1)
-    turning = [np.abs(np.linalg.norm(p + sign * big_r * normal, axis=1) - big_r) for sign in (1, -1)]
-    approaching = np.einsum("ij,ij->i", p, heading) < -tol
-    return np.where(approaching, np.maximum(*turning), np.linalg.norm(p, axis=1)) - radius
+    return closed_form_values(s[:, 0], s[:, 1], s[:, 2], speed / w_max, radius, tol)
+
+
+def closed_form_values(x, y, theta, turn_radius, radius, tol=1e-9):
+    """The closed-form avoid value on broadcastable arrays (positions, headings, turning radius
+    ``v / w_max`` and obstacle radius per state): the vectorised core of :func:`avoid_value_closed_form`."""
+    distance = np.hypot(x, y)
+    c, s = np.cos(theta), np.sin(theta)
+    turning = [np.abs(np.hypot(x - sign * turn_radius * s, y + sign * turn_radius * c) - turn_radius)
+               for sign in (1, -1)]
+    approaching = x * c + y * s < -tol
+    return np.where(approaching, np.maximum(*turning), distance) - radius
+
+
+def closed_form_dtheta(x, y, theta, turn_radius, radius, step=1e-6):
+    """dV/dtheta of the closed-form value by a central difference (the sign chooses the optimal turn)."""
+    return (closed_form_values(x, y, theta + step, turn_radius, radius)
+            - closed_form_values(x, y, theta - step, turn_radius, radius)) / (2 * step)
 
 
 def rotate_to_heading(states, heading=0.0):

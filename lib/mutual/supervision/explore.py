@@ -68,7 +68,7 @@ def safe_set_summary(w_max=0.75, mu=0.5, sigma=0.1, alpha=0.7, n_interventions=4
     library = explore_library()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", LibraryEdgeWarning)  # shown in the figure's text instead
-        fit = fit_supervisor(library, states)
+        fit = fit_supervisor(library, states, values="grid")  # the supervisor judges on the grid's values
     values = fit.value_fn.interp(states)
     expected = float(stats.norm.cdf((alpha - fit.mu) / fit.sigma))
     return {"states": states, "fit": fit, "values": values, "avoided": values <= alpha, "expected": expected,

@@ -11,11 +11,18 @@ import pandas as pd
 
 from ..seeds import generator
 from .control import wilson_interval
-from .dubins import TRUE_W_MAX, _check_positive, _real, check_states
+from .dubins import TRUE_W_MAX, _check_positive, _real, check_states, closed_form_values
+from .exact import exact_counterpart, has_closed_form, interpolated_closed_form
 from .supervisor import NoisySupervisor, collect_interventions
 from .value_function import ValueFunction, ValueLibrary, unsafe_set_contains
 
 PRIORS = ("mle", "map")
+VALUES = ("auto", "exact", "grid")
+
+
+class GridValueWarning(UserWarning):
+    """A fit on grid-interpolated values sits within the grid's error: the bias the interpolation puts on
+    the values at the interventions exceeds the standard error of the fitted margin mu."""
 
 
 class LibraryEdgeWarning(UserWarning):
@@ -46,6 +53,8 @@ class SupervisorFit:
     n: int
     prior: str
     boundary: str = None
+    values: str = "grid"
+    value_error: float = float("nan")
 
     def __repr__(self):
         w = self.library.w_maxes
@@ -53,7 +62,8 @@ class SupervisorFit:
                                                                            ("mu+2sigma", 2)))
         return (f"SupervisorFit(w_max={_fmt(self.w_max)}, mu={_fmt(self.mu)}, sigma={_fmt(self.sigma)}, "
                 f"n={self.n}, prior={self.prior!r}, alpha levels: {levels}; library of {len(w)} members "
-                f"w_max {_fmt(w.min())}..{_fmt(w.max())} ({self.library.method}), boundary={self.boundary!r})")
+                f"w_max {_fmt(w.min())}..{_fmt(w.max())} ({self.library.method}), values={self.values!r}, "
+                f"boundary={self.boundary!r})")
 
     @property
     def w_max(self):
@@ -86,11 +96,26 @@ class SupervisorFit:
         """Fraction of intervention ``states`` at or below ``alpha = mu + k sigma`` of the fitted member:
         the interventions a robot avoiding at ``alpha`` keeps clear of (Sec. 4.5; ~Phi(k) in expectation)."""
         s = check_states(states)
-        values = self.value_fn.interp(s)
+        values = member_values(self.library, s, self.values)[self.index]
         if np.isnan(values).any():
             raise ValueError(f"states: {int(np.isnan(values).sum())} lie outside the library's grid "
                              f"(|x|, |y| <= {self.library.grid_spec.half_width})")
         return float(np.mean(values <= self.level(k)))
+
+
+def expected_coverage(k, p):
+    """The expected fraction of ``p`` Gaussian observations at or below their own MLE ``mu* + k sigma*``
+    (eq. 4.8): the share of the learning interventions a robot avoiding at ``alpha = mu + k sigma`` keeps
+    clear of (Sec. 4.5), exactly: with t = (v_i - mean) / sigma*, t^2 / (p - 1) ~ Beta(1/2, (p - 2) / 2), so
+    the share is 1/2 + 1/2 I_{k^2 / (p - 1)}(1/2, (p - 2) / 2) for k >= 0; Phi(k) as p grows."""
+    from scipy import stats
+
+    k_value, p_value = _real(k), _real(p)
+    if k_value is None or not np.isfinite(k_value) or k_value < 0:
+        raise ValueError(f"k must be a finite number >= 0, got {k!r}")
+    if p_value is None or p_value != int(p_value) or p_value < 3:
+        raise ValueError(f"p must be an integer >= 3 (observations), got {p!r}")
+    return float(0.5 + 0.5 * stats.beta.cdf(min(k_value ** 2 / (p_value - 1), 1.0), 0.5, (p_value - 2) / 2))
 
 
 def gaussian_mle(values):
@@ -141,6 +166,42 @@ def numerical_gaussian_fit(values, mu_min=None):
     return mus, sigmas, logliks
 
 
+def _evaluation(library, values):
+    """How the fit evaluates the library: "exact" (the closed form at the states) or "grid"."""
+    if not isinstance(values, str) or values not in VALUES:
+        raise ValueError(f"values must be one of {VALUES}, got {values!r}")
+    closed = all(has_closed_form(m) for m in library)
+    if values == "exact" and not closed:
+        raise ValueError("values='exact': the library's members have a disturbance, for which no closed form exists; "
+                         "use values='grid'")
+    return "exact" if (values == "auto" and closed) or values == "exact" else "grid"
+
+
+def member_values(library, states, values="auto"):
+    """Every member's value at ``states`` (n, 3) -> (b, n): the closed form evaluated exactly where it exists
+    (``values="auto"`` or ``"exact"``: no interpolation error) or trilinear interpolation on the grid
+    (``"grid"``); NaN off the grid's (x, y) domain either way."""
+    s = check_states(states)
+    if _evaluation(library, values) == "grid" or library.members[0].exact:
+        return library.interp_all(s)
+    inside = np.all(np.abs(s[:, :2]) <= library.grid_spec.half_width, axis=1)
+    out = np.stack([closed_form_values(s[:, 0], s[:, 1], s[:, 2], m.speed / m.w_max, m.obstacle_radius)
+                    for m in library])
+    return np.where(inside, out, np.nan)
+
+
+def _grid_bias(library, states, index):
+    """The mean error of the grid's values of member ``index`` at ``states``: against the closed form where it
+    exists, else the closed form's own interpolation error on the same grid (no disturbance), a lower bound."""
+    member = library[index]
+    exact = closed_form_values(states[:, 0], states[:, 1], states[:, 2], member.speed / member.w_max,
+                               member.obstacle_radius)
+    if has_closed_form(member):
+        return float(np.mean(member.interp(states) - exact))
+    return float(np.mean(interpolated_closed_form(member.grid_spec, states, member.speed / member.w_max,
+                                                  member.obstacle_radius) - exact))
+
+
 @functools.lru_cache(maxsize=32)
 def _conservative_members(library, reference):
     return np.array([unsafe_set_contains(member, reference) for member in library])
@@ -158,7 +219,7 @@ def _edge(index, admissible):
     return None
 
 
-def fit_supervisor(library, states, prior="mle", reference=None):
+def fit_supervisor(library, states, prior="mle", reference=None, values="auto"):
     """Fit the supervisor's safe set to intervention ``states`` (n, 3): eq. (4.8), (4.9), (4.12).
 
     ``prior="mle"``: the argmax of the maximised likelihood over the library. ``prior="map"``: the MAP
@@ -168,6 +229,13 @@ def fit_supervisor(library, states, prior="mle", reference=None):
     interventions, NaN, states outside the grid, or zero variance (an unbounded likelihood).
     A fit on the slowest or most agile member searched warns (:class:`LibraryEdgeWarning`) and
     says so in ``fit.boundary``: the supervisor may lie beyond the library's range.
+
+    ``values``: how the members are evaluated at the interventions (:func:`member_values`): ``"auto"`` (the
+    default) the exact closed form wherever it exists (a Dubins car without disturbance), else the grid;
+    ``"grid"`` always the grid. On the grid the fit records the grid's bias at the interventions for the
+    chosen member (``fit.value_error``: against the closed form, or for a library with a disturbance the
+    closed form's interpolation error on the same grid) and warns (:class:`GridValueWarning`) when it
+    exceeds the standard error of ``mu*``, sigma* / sqrt(n): the fitted margin then sits in the grid's error.
     """
     if not isinstance(library, ValueLibrary):
         raise ValueError("library must be a mutual.supervision.ValueLibrary")
@@ -176,7 +244,8 @@ def fit_supervisor(library, states, prior="mle", reference=None):
     s = check_states(states)
     if len(s) < 2:
         raise ValueError(f"states must hold at least two interventions to estimate mu and sigma, got {len(s)}")
-    values = library.interp_all(s)
+    evaluation = _evaluation(library, values)
+    values = member_values(library, s, evaluation)
     outside = np.isnan(values[0])
     if outside.any():
         raise ValueError(f"states: {outside.sum()} interventions lie outside the library's grid "
@@ -216,7 +285,16 @@ def fit_supervisor(library, states, prior="mle", reference=None):
                       f"{library.w_maxes[admissible].min():g}..{library.w_maxes[admissible].max():g}): the best model "
                       "may lie beyond the members searched; extend the library to check", LibraryEdgeWarning,
                       stacklevel=2)
-    return SupervisorFit(library, index, mus, np.sqrt(var), logliks, admissible, len(s), prior, boundary)
+    error = float("nan")
+    if evaluation == "grid" and not library.members[0].exact:
+        error = _grid_bias(library, s, index)
+        if abs(error) > np.sqrt(var[index] / len(s)):
+            warnings.warn(f"the fit sits in the grid's error: at the {len(s)} interventions the grid's values of the "
+                          f"chosen member (w_max = {library.w_maxes[index]:g}) are off by {error:+.3g} on average, more "
+                          f"than the standard error of mu* ({np.sqrt(var[index] / len(s)):.3g}); evaluate exactly "
+                          "(values='auto') or use a finer grid", GridValueWarning, stacklevel=2)
+    return SupervisorFit(library, index, mus, np.sqrt(var), logliks, admissible, len(s), prior, boundary,
+                         evaluation, error)
 
 
 def recovery_study(library, generators, n_values, seeds, start_distance, prior="mle"):
@@ -247,8 +325,11 @@ def recovery_study(library, generators, n_values, seeds, start_distance, prior="
         raise ValueError("seeds must hold at least one seed")
     _check_positive("start_distance", start_distance)
     rows = []
+    exact = _evaluation(library, "auto") == "exact"
     for w_max, mu, sigma in generators:
-        sup = NoisySupervisor(library[library.index_of(w_max)], mu, sigma)
+        member = library[library.index_of(w_max)]
+        # the simulated supervisor judges with the same values the fit reads: exact where the fit is exact
+        sup = NoisySupervisor(exact_counterpart(member) if exact else member, mu, sigma)
         for seed in seeds:
             rng = generator(seed, "seeds")
             states = collect_interventions(sup, n_values[-1], rng, start_distance)
@@ -284,3 +365,27 @@ def recovery_summary(table, confidence=0.95):
                      "mean_abs_mu_error": (part["mu_hat"] - part["mu"]).abs().mean(),
                      "mean_sigma_ratio": (part["sigma_hat"] / part["sigma"]).mean()})
     return pd.DataFrame(rows)
+
+
+def data_efficiency_scan(table, n, chosen, share=0.9, table_name=""):
+    """Data efficiency read from a :func:`recovery_study` table: for each supervisor (``w_max``, ``sigma``), how
+    many sessions of ``n`` interventions recover ``w_max``, and whether at least ``share`` of them do. Returns
+    ``(cells, scan)``: the cells as a DataFrame, and the scan in the form of the reproduction report
+    (``seeds`` [recovered, sessions] at the ``chosen`` (w_max, sigma), ``settings`` [cells recovering in at least
+    ``share`` of sessions, cells], ``flips``: the cells that do not)."""
+    if not isinstance(table, pd.DataFrame) or {"w_max", "sigma", "n", "recovered"} - set(table.columns):
+        raise ValueError("table must be a recovery_study DataFrame")
+    part = table[table["n"] == n]
+    if part.empty:
+        raise ValueError(f"n: the table has no sessions of {n} interventions (has {sorted(table['n'].unique())})")
+    cells = part.groupby(["w_max", "sigma"])["recovered"].agg(recovered="sum", sessions="size").reset_index()
+    cells["recovered"] = cells["recovered"].astype(int)
+    cells["holds"] = cells["recovered"] >= np.ceil(share * cells["sessions"])
+    at = cells[np.isclose(cells["w_max"], chosen[0]) & np.isclose(cells["sigma"], chosen[1])]
+    if len(at) != 1:
+        raise ValueError(f"chosen: {chosen!r} is not one of the (w_max, sigma) cells")
+    flips = "; ".join(f"w_max {r['w_max']:g}, sigma {r['sigma']:g}: {r['recovered']}/{r['sessions']}"
+                      for r in cells[~cells["holds"]].to_dict("records"))
+    scan = {"table": table_name, "seeds": [int(at["recovered"].iloc[0]), int(at["sessions"].iloc[0])],
+            "settings": [int(cells["holds"].sum()), int(len(cells))], "flips": flips}
+    return cells, scan

@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
+from ..csvfile import check_names
 from .dubins import SPEED, _check_positive, _real, check_states, wrap_angle
 from .value_function import ValueFunction
 
@@ -239,6 +240,7 @@ def validate_interventions(frame, source=None):
     frame.attrs["lines"] = lines
     if len(frame) == 0:
         raise ValueError(f"{where}holds no interventions (a header but no rows)")
+    check_names(frame["participant"].tolist(), "participant", where.rstrip(": "), row=lambda i: _row(frame, i, source))
     participant = frame["participant"].map(_cell_text)
     empty = np.flatnonzero(participant.to_numpy() == "")
     if len(empty):

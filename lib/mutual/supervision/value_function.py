@@ -108,6 +108,7 @@ class ValueFunction:
     horizon: float = float("nan")
     method: str = "hj"
     dvalues_dtheta: np.ndarray = field(init=False)
+    exact = False  # True for :class:`mutual.supervision.exact.ExactValueFunction` (no interpolation)
 
     def __post_init__(self):
         if not isinstance(self.grid_spec, GridSpec):
@@ -227,9 +228,10 @@ class ValueLibrary:
             raise ValueError("members must be a non-empty list or tuple of ValueFunction")
         if not all(isinstance(m, ValueFunction) for m in members):
             raise ValueError("members must all be mutual.supervision.ValueFunction")
-        specs = {(m.grid_spec, m.obstacle_radius, m.speed, m.d_max, m.method) for m in members}
+        specs = {(m.grid_spec, m.obstacle_radius, m.speed, m.d_max, m.method, m.exact) for m in members}
         if len(specs) != 1:
-            raise ValueError("members must share one grid, obstacle radius, speed, disturbance bound and method")
+            raise ValueError("members must share one grid, obstacle radius, speed, disturbance bound and method "
+                             "(all exact or none)")
         w = np.array([m.w_max for m in members])
         if len(np.unique(w)) != len(w):
             raise ValueError(f"members must have distinct w_max, got {w.tolist()}")
@@ -281,7 +283,10 @@ class ValueLibrary:
         return self.members[i].interp(states, fill_value)
 
     def interp_all(self, states, fill_value=np.nan):
-        """Every member at states (n, 3) -> (b, n), sharing the interpolation weights."""
+        """Every member at states (n, 3) -> (b, n), sharing the interpolation weights (exact members:
+        each evaluated exactly)."""
+        if self.members[0].exact:
+            return np.stack([m.interp(states, fill_value) for m in self.members])
         return _interpolate(self.grid_spec, self.flat_values, states, fill_value)
 
 

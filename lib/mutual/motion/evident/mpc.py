@@ -17,7 +17,7 @@ remaining-horizon optimum.
 import jax.numpy as jnp
 import numpy as np
 
-from ..trajopt import ILQRError, ilqr
+from ..trajopt import ILQRError, ilqr, ilqr_batch
 from . import safety as es
 
 
@@ -72,6 +72,50 @@ def receding_horizon_ilqr(task, w0, w1, alpha_of_s, every=1, **ilqr_options):
         xs[t:stop + 1] = result.xs[t:stop + 1, :-1]
     return {"xs": xs, "us": us, "alphas": alphas[np.arange(N) // every], "replans": len(starts),
             "iterations": iterations}
+
+
+def receding_horizon_ilqr_batch(tasks, w0, w1, schedules, every=1, **ilqr_options):
+    """:func:`receding_horizon_ilqr` for several members at once (one :func:`mutual.motion.trajopt.ilqr_batch`
+    per replanning): ``tasks`` (B tasks of the same dynamics and steps, e.g. other hazards) and ``schedules``
+    (B alpha schedules) pair up member by member. Returns a list of B dicts like
+    :func:`receding_horizon_ilqr`'s. A member the batch does not finish is solved again alone by
+    :func:`mutual.motion.trajopt.ilqr` (Gauss-Newton, then DDP near the minimum; up to 2000 iterations), whose
+    ILQRError stops the run."""
+    tasks, schedules = list(tasks), list(schedules)
+    if not tasks or len(tasks) != len(schedules) or not all(isinstance(t, es.EvidentSafetyTask) for t in tasks):
+        raise ValueError("tasks and schedules must be equally long, non-empty, and tasks EvidentSafetyTasks")
+    if isinstance(every, (bool, np.bool_)) or not (isinstance(every, (int, np.integer)) and every >= 1):
+        raise ValueError(f"every must be a positive integer, got {every!r}")
+    N, B = tasks[0].steps, len(tasks)
+    if any(t.steps != N or t.x0.shape != tasks[0].x0.shape for t in tasks):
+        raise ValueError("tasks must share the dynamics and the number of steps")
+    starts = np.arange(0, N, every)
+    alphas = np.array([[float(f(t / N)) for t in starts] for f in schedules])
+    if not np.all(np.isfinite(alphas)):
+        raise ValueError("a schedule returned non-finite weights")
+    xs = np.empty((B, N + 1, tasks[0].x0.shape[0]))
+    us = np.zeros((B, N, tasks[0].controls))
+    xs[:, 0] = [t.x0 for t in tasks]
+    plan = np.zeros_like(us)
+    iterations = [[] for _ in range(B)]
+    for i, t in enumerate(starts):
+        params = [{**task.params(es.legible_weights(w1, w0, alphas[b, i])), "start": np.float64(t)}
+                  for b, task in enumerate(tasks)]
+        stacked = {k: np.stack([p[k] for p in params]) for k in params[0]}
+        guess = np.where(np.arange(N)[None, :, None] >= t, plan, 0.0)
+        z0 = np.concatenate([xs[:, t], np.zeros((B, 1))], axis=1)
+        batch = ilqr_batch(_frozen_step, _frozen_running, _frozen_terminal, z0, guess, stacked, **ilqr_options)
+        results = [batch.results[b] if batch.results[b] is not None else       # a member the batch did not finish:
+                   ilqr(_frozen_step, _frozen_running, _frozen_terminal, z0[b], guess[b], params[b], max_iter=2000)
+                   for b in range(B)]                                         # alone, with DDP near the end
+        for b, result in enumerate(results):
+            plan[b] = result.us
+            iterations[b].append(result.iterations)
+        stop = starts[i + 1] if i + 1 < len(starts) else N
+        us[:, t:stop] = plan[:, t:stop]
+        xs[:, t:stop + 1] = np.stack([r.xs[t:stop + 1, :-1] for r in results])
+    return [{"xs": xs[b], "us": us[b], "alphas": alphas[b][np.arange(N) // every], "replans": len(starts),
+             "iterations": iterations[b]} for b in range(B)]
 
 
 def continuation_costs(task, weights, states, times, guesses=(), **ilqr_options):

@@ -11,15 +11,17 @@ Srinivasa's time-weighted evidence, and what Figure 6.2's "three times longer" d
   how far the best ``alpha_k`` misses it; :func:`receding_equivalence` checks that the
   receding-horizon controller with those weights retraces the weighted optimum, and whether the
   weights increase (the thesis's "equivalent prioritisation").
-* :func:`reach_time_ratios` measures Figure 6.2's ratio over the schedules and scales the
-  thesis leaves open.
+* :func:`figure_62_scan` measures Figure 6.2's claims (the lead, "three times longer", the arcs of
+  Dragan and Srinivasa) over the goal scales and schedules the thesis leaves open.
 """
 
 import numpy as np
 import pandas as pd
 
 from ..observer import lifted_cost, lifted_dynamics, weighted_prefix_log_likelihood
-from .objective import geometric_alpha_schedule, linear_alpha_schedule, receding_horizon, replan_gains
+from .dragan import legibility_score
+from .objective import (geometric_alpha_schedule, inverse_square_alpha_schedule, linear_alpha_schedule,
+                        receding_horizon, replan_gains)
 from .path_measures import time_to_reach
 from .problem import reaching_cost, single_integrator, solve
 
@@ -103,26 +105,52 @@ def receding_equivalence(dynamics, J1, J0, x0, N, beta=1.0):
             "increasing": bool(positive and np.all(np.diff(1.0 / alphas) <= 1e-9 / alphas[:-1]))}
 
 
-SCHEDULES = {"linear": linear_alpha_schedule, "geometric": geometric_alpha_schedule}
+SCHEDULES = {"linear": linear_alpha_schedule, "geometric": geometric_alpha_schedule,
+             "inverse-square": lambda a0, a1=None: inverse_square_alpha_schedule(a0)}
 
 
-def reach_time_ratios(scales=(4.0, 6.0, 8.0), starts=(0.25, 0.5, 1.0), ends=(2.0, 4.0, 10.0),
-                      kinds=("linear", "geometric"), level=2.0, dt=0.01, N=100):
-    """Figure 6.2's ratio ``t_H1(x = level) / t_anticipative(x = level)`` over goal scales and alpha
-    schedules. Goals ``(-s, s)`` (H0) and ``(s, s)`` (H1), start at the origin, x' = u and eq. (6.17)
-    with ``dt``, ``N``; the anticipative path replans at every step (eq. (6.16)). Also returns the
-    x-coordinates of both paths at ``T / 4`` (does the anticipative one lead early?). A DataFrame."""
-    dyn, rows = single_integrator(2, dt), []
+def schedule(kind, alpha_start, alpha_end=None):
+    """The alpha schedule of eq. (6.16) named ``kind`` (a key of :data:`SCHEDULES`) from ``alpha_start`` to
+    ``alpha_end`` (``None`` for ``"inverse-square"``, which grows without bound)."""
+    if kind not in SCHEDULES:
+        raise ValueError(f"kind must be one of {sorted(SCHEDULES)}, got {kind!r}")
+    return SCHEDULES[kind](alpha_start, alpha_end)
+
+
+def figure_62_paths(scale, horizon, N, kind, alpha_start, alpha_end=None):
+    """Figure 6.2's set-up: goals ``(-s, s)`` (H0) and ``(s, s)`` (H1) from the origin, x' = u and eq. (6.17)
+    with unit weights over ``horizon`` in ``N`` steps. Returns ``{"H0", "H1", "anticipative"}`` state paths
+    (the anticipative one replans at every step with the named schedule) and the goals."""
+    dt = horizon / N
+    dyn = single_integrator(2, dt)
+    g0, g1 = np.array([-scale, scale]), np.array([scale, scale])
+    J0, J1 = reaching_cost(g0, dt), reaching_cost(g1, dt)
+    paths = {"H0": solve(dyn, J0, np.zeros(2), N).xs, "H1": solve(dyn, J1, np.zeros(2), N).xs,
+             "anticipative": receding_horizon(dyn, J1, J0, np.zeros(2), N, schedule(kind, alpha_start, alpha_end))[0]}
+    return paths, np.array([g0, g1])
+
+
+def figure_62_scan(scales, schedules, horizon=20.0, N=100, level=2.0):
+    """Figure 6.2 over what the thesis leaves open: goal scales and alpha schedules (``(kind, start, end)``
+    triples, see :func:`schedule`). One row per cell with the times to reach ``x = level`` (the caption's
+    "three times longer"), the x-coordinates at ``T / 4`` (does the anticipative path lead early?), how close
+    each path ends to its goal (relative to the goal's distance), Dragan and Srinivasa's legibility score of
+    the anticipative path and of the straight line to the goal (time normalised to 1), and how far the
+    anticipative path at ``T / 2`` lies beyond the midpoint of its chord (relative to ``s``: does it arc?)."""
+    rows, dt = [], horizon / N
     for s in scales:
-        J0, J1 = reaching_cost([-s, s], dt), reaching_cost([s, s], dt)
-        h1 = solve(dyn, J1, np.zeros(2), N).xs
-        t_h1 = time_to_reach(h1, level, dt)
-        for kind in kinds:
-            for a0 in starts:
-                for a1 in ends:
-                    xs, _, _ = receding_horizon(dyn, J1, J0, np.zeros(2), N, SCHEDULES[kind](a0, a1))
-                    t = time_to_reach(xs, level, dt)
-                    rows.append({"goal scale s": s, "schedule": kind, "alpha_start": a0, "alpha_end": a1,
-                                 "t_H1 (x = 2)": t_h1, "t_anticipative (x = 2)": t, "ratio": t_h1 / t,
-                                 "x_H1 at T/4": h1[N // 4, 0], "x_anticipative at T/4": xs[N // 4, 0]})
+        for kind, a0, a1 in schedules:
+            paths, goals = figure_62_paths(s, horizon, N, kind, a0, a1)
+            h1, xs = paths["H1"], paths["anticipative"]
+            straight = np.linspace(0.0, 1.0, N + 1)[:, None] * goals[1]
+            t_h1, t = time_to_reach(h1, level, dt), time_to_reach(xs, level, dt)
+            rows.append({"goal scale s": s, "schedule": kind, "alpha_start": a0,
+                         "alpha_end": np.inf if a1 is None else a1, "t_H1 (x = 2)": t_h1,
+                         "t_anticipative (x = 2)": t, "ratio": t_h1 / t,
+                         "x_H1 at T/4": h1[N // 4, 0], "x_anticipative at T/4": xs[N // 4, 0],
+                         "H1 end gap / |g1|": np.linalg.norm(h1[-1] - goals[1]) / np.linalg.norm(goals[1]),
+                         "anticipative end gap / |g1|": np.linalg.norm(xs[-1] - goals[1]) / np.linalg.norm(goals[1]),
+                         "D&S score anticipative": legibility_score(xs, goals, 1),
+                         "D&S score straight line": legibility_score(straight, goals, 1),
+                         "arc at T/2 / s": (xs[N // 2, 0] - 0.5 * (xs[0, 0] + xs[-1, 0])) / s})
     return pd.DataFrame(rows)

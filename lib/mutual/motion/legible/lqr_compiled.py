@@ -128,18 +128,14 @@ def _solve(arrays, QN, qN, x0, pad, per_stage):
     return xs, xN, us, K, k, V, v, pivots, scales, cost
 
 
-def riccati_compiled(stages, QN, qN, x0, N):
-    """Solve the LQ problem of :func:`mutual.motion.legible.lqr.solve_lq` with the compiled recursion.
-
-    ``stages`` maps each of ``A, B, Q, R, q, r, M, c`` to its (N, ...) array (a broadcast view of
-    a time-invariant array is passed once, not per stage). Returns NumPy arrays
-    ``xs (N+1, n), us (N, m), K, k, V (N+1, n, n), v (N+1, n), pivots (N,), scales (N,), cost``.
-    """
-    per_stage = tuple(f for f in FIELDS if N > 1 and stages[f].strides[0] != 0)
+def padded_arrays(stages, N, per_stage=None):
+    """``(arrays, pad, per_stage)``: the stage arrays as the compiled recursion takes them, padded to
+    :func:`bucket` ``(N)`` stages; ``per_stage`` (default: the fields whose arrays vary per stage)."""
+    if per_stage is None:
+        per_stage = tuple(f for f in FIELDS if N > 1 and stages[f].strides[0] != 0)
     if not per_stage:                       # the scan needs one per-stage array for its length
         per_stage = ("q",)
-    L = bucket(N)
-    pad = L - N
+    pad = bucket(N) - N
     arrays = {}
     for f in FIELDS:
         a = np.asarray(stages[f])
@@ -148,6 +144,17 @@ def riccati_compiled(stages, QN, qN, x0, N):
         else:
             a = np.ascontiguousarray(a[0])
         arrays[f] = a
+    return arrays, pad, tuple(per_stage)
+
+
+def riccati_compiled(stages, QN, qN, x0, N):
+    """Solve the LQ problem of :func:`mutual.motion.legible.lqr.solve_lq` with the compiled recursion.
+
+    ``stages`` maps each of ``A, B, Q, R, q, r, M, c`` to its (N, ...) array (a broadcast view of
+    a time-invariant array is passed once, not per stage). Returns NumPy arrays
+    ``xs (N+1, n), us (N, m), K, k, V (N+1, n, n), v (N+1, n), pivots (N,), scales (N,), cost``.
+    """
+    arrays, pad, per_stage = padded_arrays(stages, N)
     with jax.enable_x64(True):
         out = _solve(arrays, np.asarray(QN), np.asarray(qN), np.asarray(x0), pad, per_stage)
         xs, xN, us, K, k, V, v, pivots, scales, cost = (np.asarray(o) for o in out)
@@ -155,3 +162,31 @@ def riccati_compiled(stages, QN, qN, x0, N):
     V = np.concatenate([V[pad:], np.asarray(QN)[None]])
     v = np.concatenate([v[pad:], np.asarray(qN)[None]])
     return xs, us[pad:], K[pad:], k[pad:], V, v, pivots[pad:], scales[pad:], float(cost)
+
+
+def solve_flops(stages, QN, qN, x0, N, combine=None):
+    """XLA's static count of floating-point operations of one compiled solve (backward and forward
+    passes). ``combine``: None for the problem as given, or ``(w1, w0, stages0, QN0, qN0)`` to count a
+    program that first forms the cost ``w1 J - w0 J0`` stage by stage from both hypotheses' arrays
+    and then solves it (Corollary 6.4.2.1's legible objective, eq. (6.15)). A count, not a timing."""
+    others = None if combine is None else combine[2]
+    varying = tuple(f for f in FIELDS if N > 1 and (stages[f].strides[0] != 0
+                                                   or (others is not None and others[f].strides[0] != 0)))
+    arrays, pad, per_stage = padded_arrays(stages, N, varying)
+    with jax.enable_x64(True):
+        if combine is None:
+            fn = jax.jit(lambda a, QN_, qN_, x: _solve(a, QN_, qN_, x, pad, per_stage))
+            lowered = fn.lower(arrays, np.asarray(QN), np.asarray(qN), np.asarray(x0))
+        else:
+            w1, w0, stages0, QN0, qN0 = combine
+            arrays0 = padded_arrays(stages0, N, per_stage)[0]
+            cost_fields = ("Q", "R", "q", "r", "M")
+
+            def legible(a1, a0, QN1, QN0_, qN1, qN0_, x):
+                mixed = {f: (w1 * a1[f] - w0 * a0[f]) if f in cost_fields else a1[f] for f in FIELDS}
+                return _solve(mixed, w1 * QN1 - w0 * QN0_, w1 * qN1 - w0 * qN0_, x, pad, per_stage)
+            lowered = jax.jit(legible).lower(arrays, arrays0, np.asarray(QN), np.asarray(QN0), np.asarray(qN),
+                                             np.asarray(qN0), np.asarray(x0))
+        analysis = lowered.compile().cost_analysis()
+    analysis = analysis[0] if isinstance(analysis, (list, tuple)) else analysis
+    return float(analysis["flops"])

@@ -81,6 +81,15 @@ def geometric_alpha_schedule(alpha_start, alpha_end):
     return lambda s: alpha_start * (alpha_end / alpha_start) ** s
 
 
+def inverse_square_alpha_schedule(alpha_start):
+    """``alpha(s) = alpha_start / (1 - s)^2`` for eq. (6.16), ``s = t / T``: the weighting that Dragan and
+    Srinivasa's ``f(t) = T - t`` on partial viewings amounts to (section 6.5; the notebook recovers it from
+    their weighted optimum), rising without bound so that the last replans serve the task alone."""
+    if not (np.isfinite(alpha_start) and alpha_start > 0):
+        raise ValueError(f"need a finite alpha_start > 0, got {alpha_start!r}")
+    return lambda s: alpha_start / (1.0 - s) ** 2
+
+
 def replan_gains(dynamics, J1, J0, N, w1, w0, starts):
     """Feedback gains of the replans ``min w1[p] J1 - w0[p] J0`` on ``[starts[p], N)`` (eq. (6.16)),
     all from one batched backward sweep (:func:`.lqr.riccati_backward`): returns

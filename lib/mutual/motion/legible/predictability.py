@@ -74,3 +74,18 @@ def correlated_sets(table, threshold=0.3, exclude=(MOTION_SETS[-1],)):
     out) have ``r(J1, L) >= threshold``; the rule fixed for "typically correlated" (section 6.6)."""
     keep = table[~table["motion set"].isin(exclude)]
     return int((keep["r(J1, L)"] >= threshold).sum())
+
+
+def correlation_scan(dynamics, J1, J0, x0, N, seeds, threshold=0.3, **kwargs):
+    """Section 6.6's "typically correlated" over what the thesis leaves open: :func:`predictability_correlations`
+    for each seed (``np.random.default_rng(seed)``; keyword arguments go to :func:`motion_sets`). Returns
+    ``(by_seed, by_set)``: per seed the number of motion sets (the last, zero by construction, left out) with
+    ``r(J1, L) >= threshold``; per motion set the range of ``r`` over the seeds and in how many seeds it
+    reaches the threshold."""
+    tables = [predictability_correlations(dynamics, J1, J0, x0, N, np.random.default_rng(seed), **kwargs).assign(seed=seed)
+              for seed in seeds]
+    every = pd.concat(tables, ignore_index=True)
+    by_seed = pd.DataFrame({"seed": list(seeds), "sets with r >= threshold": [correlated_sets(t, threshold) for t in tables]})
+    by_set = every.groupby("motion set", sort=False)["r(J1, L)"].agg(
+        r_min="min", r_max="max", seeds_reaching=lambda r: int((r >= threshold).sum())).reset_index()
+    return by_seed, by_set

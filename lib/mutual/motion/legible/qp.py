@@ -99,7 +99,9 @@ def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL
     return _dense_qp(dynamics, J1, distractors, x0, N, etas, solver, tol)
 
 
-def _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol):
+def dynamics_constraints(dynamics, x0, N):
+    """The dynamics ``x_0 = x0, x_{k+1} = A_k x_k + B_k u_k`` as ``E z = e`` over
+    ``z = (x_0 .. x_N, u_0 .. u_{N-1})`` (sparse ``E``); returns ``(E, e)``."""
     n, m = dynamics.n, dynamics.m
     dyn = dynamics.stages(0, N)
     A, B = np.broadcast_to(dyn.A, (N, n, n)), np.broadcast_to(dyn.B, (N, n, m))
@@ -107,9 +109,20 @@ def _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol):
     shift = sp.vstack([sp.csr_matrix((n, N * n)), sp.block_diag(list(A), format="csr")])
     Ex = sp.eye(nx, format="csr") - sp.hstack([shift, sp.csr_matrix((nx, n))])
     Eu = -sp.vstack([sp.csr_matrix((n, N * m)), sp.block_diag(list(B), format="csr")])
-    E = sp.hstack([Ex, Eu]).tocsc()
     e = np.zeros(nx)
     e[:n] = x0
+    return sp.hstack([Ex, Eu]).tocsc(), e
+
+
+def stacked_cost(cost, N, n, m):
+    """``J = 1/2 z'Pz + p'z + const`` over ``z = (x_0 .. x_N, u_0 .. u_{N-1})``: ``(P sparse, p, const)``."""
+    return _stacked(cost, N, n, m)[:3]
+
+
+def _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol):
+    n, m = dynamics.n, dynamics.m
+    nx = (N + 1) * n
+    E, e = dynamics_constraints(dynamics, x0, N)
     P1, p1, c1, blocks1 = _stacked(J1, N, n, m)
     if not _blockwise_psd(blocks1, tol)[1]:
         return None

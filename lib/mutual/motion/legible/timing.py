@@ -68,6 +68,35 @@ def corollary_time_ratios(sizes=(100, 400, 1600), alpha=1.0, repeats=5, backend=
     return table
 
 
+def _stage_dict(dynamics, cost, N):
+    dyn, c = dynamics.stages(0, N), cost.stages(0, N)
+    n, m = dyn.n, dyn.m
+    return {"A": np.broadcast_to(dyn.A, (N, n, n)), "B": np.broadcast_to(dyn.B, (N, n, m)),
+            "Q": np.broadcast_to(c.Q, (N, n, n)), "R": np.broadcast_to(c.R, (N, m, m)),
+            "q": np.broadcast_to(c.q, (N, n)), "r": np.broadcast_to(c.r, (N, m)),
+            "M": np.broadcast_to(np.zeros((n, m)), (N, n, m)), "c": np.broadcast_to(np.zeros(n), (N, n))}, c
+
+
+def corollary_operation_counts(sizes=(100, 400, 1600), alpha=1.0):
+    """Corollary 6.4.2.1 as a count instead of a timing: XLA's floating-point operations of the compiled
+    plain solve of ``J1`` and of the compiled legible solve that forms ``(1 + alpha) J1 - J0`` from both
+    hypotheses' stage arrays and then runs the same recursion (:func:`.lqr_compiled.solve_flops`), on the
+    reference problem for each horizon in ``sizes``. A DataFrame with both counts and their ratio;
+    deterministic on a given machine and JAX version."""
+    from .lqr_compiled import solve_flops
+
+    rows = []
+    for N in sizes:
+        dyn, J1, J0 = _reference(N)
+        s1, c1 = _stage_dict(dyn, J1, N)
+        s0, c0 = _stage_dict(dyn, J0, N)
+        plain = solve_flops(s1, c1.QN, c1.qN, np.zeros(2), N)
+        legible = solve_flops(s1, c1.QN, c1.qN, np.zeros(2), N, combine=(1.0 + alpha, 1.0, s0, c0.QN, c0.qN))
+        rows.append({"N": N, "plain LQR (flops)": plain, "legible LQR (flops)": legible,
+                     "ratio legible / plain": legible / plain})
+    return pd.DataFrame(rows)
+
+
 def replan_seconds(N=100, repeats=20, backend="jax", alpha=1.0):
     """Latency of one replan of eq. (6.16) on the reference problem: the legible LQ solve over the
     whole remaining horizon ``N`` (the longest replan) from a fresh state. Returns
@@ -80,6 +109,36 @@ def replan_seconds(N=100, repeats=20, backend="jax", alpha=1.0):
     best = interleaved_best_times({"replan": lambda: legible_trajectory(dyn, J1, J0, x0, N, alpha,
                                                                         backend=backend)}, repeats)["replan"]
     return best, max(first - best, 0.0)
+
+
+def replan_against_dragan(N=100, n_goals=2, repeats=5):
+    """Section 6.5 (line 1255): "whereas the original path planning problem would have been too expensive to
+    replan, the streamlined objective ... is tractable enough to replan online". Wall-clock seconds of one
+    legible replan over the whole horizon (the compiled Riccati solve of eq. (6.15), x' = u, eq. (6.17),
+    compile excluded) against Dragan and Srinivasa's path planner on the same goals
+    (:func:`mutual.motion.legible.dragan.optimise_legibility`: functional gradient with a banded solve of
+    its metric, from the straight line until an iteration changes the score by less than 1e-9), each the
+    best of ``repeats`` interleaved runs, in CPU time of this process (as ``make bench`` measures: on a busy
+    machine the wall clock of a compiled call includes waiting for JAX's dispatch thread) and wall-clock time. Goals: ``n_goals`` on a row at height 1, x from -1 to 1, the
+    truth the last; both solve their own formulation to convergence. Returns a dict with both
+    methods' times on both clocks, the ratios and D&S's iterations."""
+    from .dragan import optimise_legibility
+
+    if not isinstance(n_goals, (int, np.integer)) or n_goals < 2:
+        raise ValueError(f"n_goals must be an integer >= 2, got {n_goals!r}")
+    goals = np.c_[np.linspace(-1.0, 1.0, n_goals), np.ones(n_goals)]
+    dt = 1.0 / N
+    dyn = single_integrator(2, dt)
+    costs = [reaching_cost(g, dt) for g in goals]
+    x0 = np.zeros(2)
+    legible_trajectory(dyn, costs[-1], costs[:-1], x0, N, 1.0, backend="jax")     # compile
+    theirs = optimise_legibility(x0, goals, n_goals - 1, N=N, max_iter=20_000)
+    fns = {"ours": lambda: legible_trajectory(dyn, costs[-1], costs[:-1], x0, N, 1.0, backend="jax"),
+           "theirs": lambda: optimise_legibility(x0, goals, n_goals - 1, N=N, max_iter=20_000)}
+    cpu, wall = interleaved_best_times(fns, repeats, clock="process"), interleaved_best_times(fns, repeats)
+    return {"N": N, "goals": n_goals, "CPU s ours": cpu["ours"], "CPU s theirs": cpu["theirs"],
+            "ratio (CPU)": cpu["theirs"] / cpu["ours"], "wall s ours": wall["ours"], "wall s theirs": wall["theirs"],
+            "ratio (wall)": wall["theirs"] / wall["ours"], "D&S iterations": theirs.iterations}
 
 
 def receding_horizon_seconds(N=100, repeats=5, schedule=(0.25, 4.0)):
