@@ -85,7 +85,7 @@ def test_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys, monkeyp
 
 def test_every_command_writes_through_the_output_set():
     """One mechanism: no command module writes files itself (common.output_set does)."""
-    for name in ("constraints", "motion", "power", "study", "supervisor"):
+    for name in ("constraints", "continuous", "motion", "power", "study", "supervisor"):
         source = (Path(common.__file__).parent / f"{name}.py").read_text()
         assert "output_set(args)" in source, name
         assert "write_csv(" not in source and "save_figure(" not in source and "to_csv(" not in source, name

@@ -109,6 +109,23 @@ def test_simulate_a_gridworld_writes_demonstrations_that_infer_reads(tmp_path, c
     assert out["n_demonstrations"] == 10
 
 
+def test_simulate_that_fails_while_writing_leaves_no_output(tmp_path, capsys, monkeypatch):
+    """The demonstrations go through the output set: a full disk after a partial write leaves nothing."""
+    import errno
+    import mutual.constraints as constraints
+
+    def full_disk(path, demos):
+        Path(path).write_text("demo,t,state,action\n0,0,")
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+    monkeypatch.setattr(constraints, "write_demonstrations", full_disk)
+    out = tmp_path / "sim"
+    assert main(["constraints", "simulate", "--world", str(EXAMPLES / "world.toml"), "--n", "3", "--out", str(out),
+                 "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert "No space left on device" in err and "no output was left" in err and "--out" in err
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("args, phrases", [
     (["infer-continuous", EXAMPLES / "malformed" / "trajectories_gap.csv", "--system", EXAMPLES / "pendulum.toml"],
      ["trajectories_gap.csv", "line 5", "column 't'", "gap in time"]),

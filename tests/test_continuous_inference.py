@@ -225,3 +225,14 @@ def test_refinement_reports_every_level():
     table, runs = refinement(problem, rec, levels=1, truth=[Bound(1, "upper", 0.4)], scheduler="inline")
     assert list(table["level"]) == [0, 1][:len(runs)] and len(runs) >= 1
     assert runs[-1].problem.grid.n_cells >= runs[0].problem.grid.n_cells
+
+
+def test_measured_runs_fresh_or_in_this_process_with_the_same_result():
+    """Notebook 09's timer: a fresh process reports its peak memory; a quick run's (in this process) none."""
+    import math
+    from mutual.constraints.continuous import experiments
+    result, seconds, peak = experiments.measured(math.hypot, 3.0, 4.0)
+    assert result == 5.0 and seconds >= 0 and peak > 0
+    result, seconds, peak = experiments.measured(math.hypot, 3.0, 4.0, fresh=False)
+    assert result == 5.0 and seconds >= 0 and math.isnan(peak)
+    assert math.isnan(experiments.idle_memory(fresh=False))

@@ -184,11 +184,10 @@ def _report_inference(args, run, traj_path, system_path):
     common.use_agg()
     table = run.ranking()
     chosen = run.chosen()
-    outputs = {
-        "ranking": common.write_csv(table, common.output_path(args, "continuous_ranking.csv"), float_format="%.8g"),
-        "chosen": common.write_csv(chosen, common.output_path(args, "continuous_chosen.csv"), float_format="%.8g"),
-        "figure": common.save_figure(inference_figure(run), common.output_path(args, "continuous_constraints.png")),
-    }
+    with common.output_set(args) as files:
+        outputs = {"ranking": files.csv(table, "continuous_ranking.csv"),
+                   "chosen": files.csv(chosen, "continuous_chosen.csv"),
+                   "figure": files.figure(inference_figure(run), "continuous_constraints.png")}
     problem, mapped = run.problem, run.mapped
     stopped = {"rounds": "rounds", "min_gain": "min-gain", "no feasible candidate": "no candidate left"}[run.result.stop]
     results = {
@@ -273,8 +272,10 @@ def _simulate_system(args):
     if args.no_controls:
         from dataclasses import replace
         recording = replace(recording, controls=None)
-    out = common.output_path(args, "trajectories.csv")
-    write_recording(out, recording, problem.system.state_names, problem.system.control_names)
+    with common.output_set(args) as files:
+        write_recording(files.path("trajectories.csv"), recording, problem.system.state_names,
+                        problem.system.control_names)
+    out = files.final("trajectories.csv")
     states = np.concatenate(recording.states)
     ranges = {name: [float(states[:, i].min()), float(states[:, i].max())] for i, name in enumerate(problem.grid.names)}
     results = {"command": "constraints simulate", "system": str(path), "demonstrator": kind, "hidden": list(texts),
@@ -329,8 +330,9 @@ def _simulate_world(args):
     with common.about(path):
         mask = constraint_mask(grid.mdp, states, psi if psi else 0.0, actions)
         demos = sample_demonstrations(grid.mdp, n, mask, rng=seed)
-    out = common.output_path(args, "demonstrations.csv")
-    write_demonstrations(out, demos)
+    with common.output_set(args) as files:
+        write_demonstrations(files.path("demonstrations.csv"), demos)
+    out = files.final("demonstrations.csv")
     results = {"command": "constraints simulate", "world": str(path), "hidden": list(args.hidden or []),
                "n_demonstrations": n, "steps": demos.steps, "seed": seed, "outputs": {"demonstrations": str(out)}}
     common.report(args, f"Simulated {n} demonstrations of {demos.steps} steps in {path} (Boltzmann agent, seed {seed}) "

@@ -12,20 +12,23 @@ only time (and, to bound memory, blocks of candidates) is looped over.
 * :func:`rank_candidates` -- log F and the exact likelihood gain of every candidate.
 
 Algorithm 4 runs on one of three engines: ``"jax"``, the compiled stencil backup of
-:mod:`.fast` (grids: successors at a few fixed index offsets), ``"gather"``, the same compiled
-backup for any MDP with at most ``fast.MAX_SUCCESSORS`` successors per state-action pair (the
-discretized continuous systems of :mod:`.continuous`), or ``"numpy"``, a log-space backup with a
-(sparse) matrix product per step that takes any MDP. ``engine="auto"`` (the default) uses jax
-where it applies, else numpy; the tests check that all three give the same numbers.
+:mod:`.fast` (grids: successors at a few fixed index offsets), ``"gather"``, the compiled backup
+of :mod:`.gather` for any MDP with at most ``gather.MAX_SUCCESSORS`` successors per state-action
+pair (the discretized continuous systems of :mod:`.continuous`), or ``"numpy"``, a log-space
+backup with a (sparse) matrix product per step that takes any MDP. ``engine="auto"`` (the
+default) uses jax where it applies, else numpy; the tests check that all three give the same
+numbers. :func:`rank_candidates` backs up only the states that the demonstrations' starts can
+reach within the horizon (:mod:`.reachable`; the same numbers) where the stencil does not apply.
 """
 
 import numpy as np
 import scipy.sparse as sp
 
-from . import fast
+from . import fast, gather
 from .demonstrations import check_demonstrations
 from . import mdp as _mdp
 from .mdp import check_mask, expected_next, masked_logsumexp, soft_bellman_backup, soft_policy
+from .reachable import restricted
 
 
 _BLOCK_ENTRIES = 2 ** 22  # bound on X * A * (candidates per block): 32 MiB of float64
@@ -58,9 +61,9 @@ def _engine_form(mdp, engine):
     if engine not in ENGINES:
         raise ValueError(f"engine: must be one of {ENGINES}, got {engine!r}")
     if engine == "gather":
-        form = fast.gather_form(mdp)
+        form = gather.gather_form(mdp)
         if form is None:
-            raise ValueError(f"engine: the gather backup needs <= {fast.MAX_SUCCESSORS} successors per state-action "
+            raise ValueError(f"engine: the gather backup needs <= {gather.MAX_SUCCESSORS} successors per state-action "
                              "pair, transition probabilities >= 1e-140 and jax installed; use engine='numpy'")
         return form
     form = None if engine == "numpy" else fast.stencil_form(mdp)
@@ -70,13 +73,18 @@ def _engine_form(mdp, engine):
     return form
 
 
-def backup_columns(mdp, masks_of, n, demos=None, engine="auto"):
+def backup_columns(mdp, masks_of, n, demos=None, engine="auto", layers=None):
     """Algorithm 4 for ``n`` candidates whose masks Phi_C (X, A, k) ``masks_of(block)`` returns
     for a slice of them, block by block so memory stays bounded: ``(V0 (X, n), log_lik (n,))``,
-    the log-likelihood of ``demos`` under each (eq. 2.19; -inf where infeasible, 0 without demos)."""
+    the log-likelihood of ``demos`` under each (eq. 2.19; -inf where infeasible, 0 without demos).
+    ``layers``: the gather engine may compute V_t on the first ``layers[t]`` states only
+    (:func:`.gather.segments`; V0 is then right on the first ``layers[0]``)."""
     form = _engine_form(mdp, engine)
+    allowed = lambda b: masks_of(b) & mdp.allowed[:, :, None]      # noqa: E731
+    if isinstance(form, gather.GatherForm):
+        return gather.backup_blocks(mdp, form, allowed, n, demos, layers)
     if form is not None:
-        return fast.backup_blocks(mdp, form, lambda b: masks_of(b) & mdp.allowed[:, :, None], n, demos)
+        return fast.backup_blocks(mdp, form, allowed, n, demos)
     V0, log_lik = np.empty((mdp.n_states, n)), np.empty(n)
     for block in _blocks(mdp, n):
         V0[:, block], log_lik[block] = _numpy_backup(mdp, masks_of(block) & mdp.allowed[:, :, None], demos)
@@ -264,7 +272,7 @@ def forbidden_columns(mdp, forbidden, name="forbidden"):
     return forbidden.shape[2], lambda block: forbidden[:, :, block]
 
 
-def rank_candidates(mdp, demos, forbidden, base_mask=None, engine="auto"):
+def rank_candidates(mdp, demos, forbidden, base_mask=None, engine="auto", reachable=True):
     """Score candidates that add ``forbidden`` (X, A, K) to Phi_{C0} = ``base_mask``, by Algorithm 4.
 
     Returns ``(log_f, gain)``, both (K,): ``log_f`` the mean over demonstrations of
@@ -273,19 +281,33 @@ def rank_candidates(mdp, demos, forbidden, base_mask=None, engine="auto"):
     deterministic dynamics (gain = -log_f); under stochastic dynamics the realised
     transitions add a correction. Candidates that make a demonstration infeasible
     (also through combining with C0) get log_f = nan and gain = -inf. ``forbidden`` may
-    also be a sparse (X*A, K) matrix; ``engine`` as in :func:`log_partition`.
+    also be a sparse (X*A, K) matrix; ``engine`` as in :func:`log_partition`. ``reachable``:
+    back up only the states the demonstrations' starts reach (:mod:`.reachable`; the same
+    numbers) unless the compiled stencil runs.
     """
     check_demonstrations(mdp, demos)
     base = check_mask(mdp, base_mask, "base_mask")
     if base.ndim != 2:
         raise ValueError("base_mask: must be one (X, A) mask")
     n, columns = forbidden_columns(mdp, forbidden)
+    layers = None
+    if reachable and not (engine in ("auto", "jax") and _engine_form(mdp, engine) is not None):
+        part = restricted(mdp, demos.states[:, 0])
+        if part is not None:
+            mdp, demos, base, layers = part.mdp, part.demos(demos), part.mask(base), part.layers
+            n, columns = forbidden_columns(mdp, part.columns(forbidden))
     starts = demos.states[:, 0]
-    V0, ll0 = backup_columns(mdp, lambda block: base[:, :, None], 1, demos, engine)
-    if not np.isfinite(ll0[0]):
+
+    def masks_of(block):       # candidate 0 is C0 itself, the baseline, backed up with the rest
+        first, stop = max(block.start, 1), block.stop
+        head = np.broadcast_to(base[:, :, None], base.shape + (first - block.start,))
+        return np.concatenate([head, base[:, :, None] & ~columns(slice(first - 1, stop - 1))], axis=2)
+
+    V, ll = backup_columns(mdp, masks_of, n + 1, demos, engine, layers)
+    if not np.isfinite(ll[0]):
         raise ValueError("base_mask: the baseline constraints make a demonstration infeasible")
-    V, ll = backup_columns(mdp, lambda block: base[:, :, None] & ~columns(block), n, demos, engine)
+    V, V0, ll, ll0 = V[:, 1:], V[:, :1], ll[1:], ll[0]
     feasible = np.isfinite(ll)
     with np.errstate(invalid="ignore"):
         log_f = np.where(feasible, (V[starts] - V0[starts]).mean(axis=0), np.nan)
-    return log_f, np.where(feasible, (ll - ll0[0]) / demos.n, -np.inf)
+    return log_f, np.where(feasible, (ll - ll0) / demos.n, -np.inf)

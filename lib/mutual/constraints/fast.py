@@ -23,16 +23,12 @@ probability exceeds 1e-140 (then p LOW < DEAD - 1e100, while every finite value 
 the numpy backup -- when that fails, when the successors need more than ``MAX_OFFSETS``
 distinct offsets, or when jax is not installed.
 
-**Any layout** (the ``"gather"`` engine): an MDP whose every state-action pair reaches at most
-``MAX_SUCCESSORS`` states -- a discretized continuous system (:mod:`.continuous`), where the
-successors of a cell are not at offsets shared by all cells -- is written in *gather form*,
-index[x, a, j] and P[x, a, j] = S(x, a, index[x, a, j]) (padded with P = 0), and the same
-compiled scan computes E_{x'} V(x') = sum_j P[x, a, j] V(index[x, a, j]) by a gather per slot.
+Any other layout with few successors per state-action pair (a discretized continuous system)
+runs on the gather form of :mod:`.gather`, which shares this module's sentinel and block runner.
 """
 
 import os
 import weakref
-from collections import namedtuple
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -41,18 +37,12 @@ import scipy.sparse as sp
 LOW, DEAD = -1e300, -1e150
 MIN_PROBABILITY = 1e-140
 MAX_OFFSETS = 27
-MAX_SUCCESSORS = 64      # the gather form: at most this many successors per state-action pair
 THREADS = min(2, os.cpu_count() or 1)   # blocks run concurrently (the compendium's machines have 2 cores)
 BLOCK_ENTRIES = 2 ** 18   # X * A * (candidates per block): 2 MiB of float64 per (X, A, K) temporary
 
 _FORMS = weakref.WeakKeyDictionary()
-_GATHER = weakref.WeakKeyDictionary()
 _EXACT = weakref.WeakKeyDictionary()
 _KERNELS = {}
-
-GatherForm = namedtuple("GatherForm", "index P")
-GatherForm.__doc__ = "S in gather form: index (X, A, J) int32 successors and P (X, A, J) their probabilities."
-
 
 def stencil_form(mdp):
     """``(offsets, P)`` with P[x, a, j] = S(x, a, x + offsets[j]) (X, A, J), or None when the
@@ -78,31 +68,6 @@ def stencil_form(mdp):
     return form
 
 
-def gather_form(mdp):
-    """:class:`GatherForm` of any MDP whose state-action pairs reach at most ``MAX_SUCCESSORS``
-    states with probabilities >= ``MIN_PROBABILITY`` (module docstring), or None. Cached per MDP."""
-    if mdp in _GATHER:
-        return _GATHER[mdp]
-    form = None
-    try:
-        import jax  # noqa: F401
-    except ImportError:      # pragma: no cover - jax is in the lock
-        jax = None
-    csr = sp.csr_matrix(mdp.transitions)
-    csr.eliminate_zeros()
-    counts = np.diff(csr.indptr)
-    J = int(counts.max()) if counts.size else 0
-    if jax is not None and csr.nnz and 0 < J <= MAX_SUCCESSORS and csr.data.min() >= MIN_PROBABILITY:
-        X, A = mdp.n_states, mdp.n_actions
-        row = np.repeat(np.arange(X * A), counts)
-        slot = np.arange(csr.nnz) - np.repeat(csr.indptr[:-1], counts)
-        index, P = np.zeros((X * A, J), dtype=np.int32), np.zeros((X * A, J))
-        index[row, slot], P[row, slot] = csr.indices, csr.data
-        form = GatherForm(index.reshape(X, A, J), P.reshape(X, A, J))
-    _GATHER[mdp] = form
-    return form
-
-
 def sentinel_is_exact(mdp):
     """Whether -inf may be carried as LOW exactly: every positive S(x, a, x') >= MIN_PROBABILITY."""
     if mdp not in _EXACT:
@@ -120,99 +85,112 @@ def block_size(mdp, n):
     return min(sizes, key=lambda b: (-(-max(n, 1) // b) * b, -b))
 
 
-def gather_block_size(mdp, n):
-    """Candidates per compiled block of the gather form: as :func:`block_size`, but a few candidates
-    (a round's baseline is one) get a block of their own size, 1, 2, 4 or 8, not 16."""
-    return min(block_size(mdp, n), 1 << (max(n, 1) - 1).bit_length())
-
-
-def _kernel(kind):
-    """The jitted backup scan for S in stencil form (``kind="stencil"``) or gather form (``"gather"``)."""
-    if kind not in _KERNELS:
+def _kernel():
+    """The jitted backup scan for S in stencil form."""
+    if "stencil" not in _KERNELS:
         import jax
         import jax.numpy as jnp
 
-        def expected(V, P, index, offsets, pad_lo, pad_hi):
-            """E_{x'} V(x') for every (x, a) and candidate: (X, A, Kb)."""
-            X, EV = V.shape[0], 0.0
-            if kind == "stencil":
-                Vp = jnp.pad(V, ((pad_lo, pad_hi), (0, 0)))
+        def run(P, R, w, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
+            X = P.shape[0]
+
+            def expected(V):
+                """E_{x'} V(x') for every (x, a) and candidate: (X, A, Kb)."""
+                Vp, EV = jnp.pad(V, ((pad_lo, pad_hi), (0, 0))), 0.0
                 for j, o in enumerate(offsets):
                     EV = EV + P[:, :, j, None] * jax.lax.slice_in_dim(Vp, pad_lo + o, pad_lo + o + X)[:, None, :]
-            else:
-                for j in range(P.shape[2]):
-                    EV = EV + P[:, :, j, None] * V[index[:, :, j]]
-            return EV
+                return EV
 
-        def run(P, index, R, w, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
-            X, Kb = P.shape[0], forbidden.shape[2]
+            step = soft_step(expected, R, forbidden)
+            init = (jnp.broadcast_to(w[:, None], (X, forbidden.shape[2])), jnp.zeros(forbidden.shape[2]),
+                    jnp.zeros(forbidden.shape[2], dtype=bool))
+            return jax.lax.scan(step, init, (dx, da, valid))[0]
 
-            def step(carry, inputs):
-                V, ll, infeasible = carry
-                x_t, a_t, ok = inputs
-                EV = expected(V, P, index, offsets, pad_lo, pad_hi)
-                Q = jnp.where(forbidden, -jnp.inf, EV + R[:, :, None])
-                top = Q.max(axis=1)
-                alive = top > DEAD
-                shift = jnp.where(alive, top, 0.0)
-                V = jnp.where(alive, jnp.log(jnp.exp(Q - shift[:, None, :]).sum(axis=1)) + shift, LOW)
-                q = Q[x_t, a_t]                                            # (N, Kb)
-                lost = q <= DEAD
-                ll = ll + jnp.where(ok, jnp.where(lost, 0.0, q - V[x_t]).sum(axis=0), 0.0)
-                return (V, ll, infeasible | (ok & lost.any(axis=0))), None
-
-            init = (jnp.broadcast_to(w[:, None], (X, Kb)), jnp.zeros(Kb), jnp.zeros(Kb, dtype=bool))
-            (V, ll, infeasible), _ = jax.lax.scan(step, init, (dx, da, valid))
-            return V, ll, infeasible
-
-        _KERNELS[kind] = jax.jit(run, static_argnames=("offsets", "pad_lo", "pad_hi"))
-    return _KERNELS[kind]
+        _KERNELS["stencil"] = jax.jit(run, static_argnames=("offsets", "pad_lo", "pad_hi"))
+    return _KERNELS["stencil"]
 
 
-def backup_blocks(mdp, form, masks_of, n, demos=None):
-    """Algorithm 4 for ``n`` candidate masks, compiled: ``masks_of(block)`` gives the allowed
-    masks Phi_C (X, A, k) of the candidates in ``block`` (a slice); ``form`` is the stencil form
-    (:func:`stencil_form`) or a :class:`GatherForm`. Returns ``(V0, log_lik)``: V_{C,0} as (X, n)
-    and the demonstrations' log-likelihood (n,), -inf where infeasible."""
+def soft_step(expected, R, forbidden, refresh=None, log=None):
+    """One step of the scan (eq. 2.20-2.21) for ``expected(V)`` = E_{x'} V(x') (m, A, Kb) on the first m
+    states: V_t = log sum_a Phi_C exp(r + E V_{t+1}) there, and each candidate's demonstration
+    log-likelihood sum_i log P_C(a_t | x_t, t) (eq. 2.19) accrued, ``LOW`` for -inf (module docstring).
+    The carry holds V for all states; the first m rows are replaced (the rest are never read again),
+    then ``refresh(V)``, if given, updates any rows derived from them."""
     import jax
     import jax.numpy as jnp
+    log = jnp.log if log is None else log
 
-    if isinstance(form, GatherForm):
-        kind, P, index, statics = "gather", form.P, form.index, dict(offsets=(), pad_lo=0, pad_hi=0)
-    else:
-        (offsets, P), kind, index = form, "stencil", np.zeros((1, 1, 1), dtype=np.int32)
-        statics = dict(offsets=offsets, pad_lo=max(0, -min(offsets)), pad_hi=max(0, max(offsets)))
-    T, X = mdp.horizon, mdp.n_states
+    def step(carry, inputs):
+        V, ll, infeasible = carry
+        x_t, a_t, ok = inputs
+        Q = jnp.where(forbidden, -jnp.inf, expected(V) + R[:, :, None])
+        top = Q.max(axis=1)
+        alive = top > DEAD
+        shift = jnp.where(alive, top, 0.0)
+        Vm = jnp.where(alive, log(jnp.exp(Q - shift[:, None, :]).sum(axis=1)) + shift, LOW)
+        V = Vm if Vm.shape == V.shape else jax.lax.dynamic_update_slice_in_dim(V, Vm, 0, axis=0)
+        V = V if refresh is None else refresh(V)
+        q = Q[x_t, a_t]                                            # (N, Kb)
+        lost = q <= DEAD
+        ll = ll + jnp.where(ok, jnp.where(lost, 0.0, q - V[x_t]).sum(axis=0), 0.0)
+        return (V, ll, infeasible | (ok & lost.any(axis=0))), None
+
+    return step
+
+
+def demo_steps(mdp, demos):
+    """The demonstrations as the scan's inputs, last step first: states, actions (T, N) and which
+    steps are demonstrated (T,)."""
+    T = mdp.horizon
     steps = 0 if demos is None else demos.steps
     dx = np.zeros((T, 1 if demos is None else demos.n), dtype=np.int32)
     da = np.zeros_like(dx)
     if demos is not None:
         dx[:steps], da[:steps] = demos.states[:, :-1].T, demos.actions.T
-    valid = np.arange(T) < steps
-    kb = block_size(mdp, max(n, 1)) if kind == "stencil" else gather_block_size(mdp, max(n, 1))
+    return dx[::-1].copy(), da[::-1].copy(), (np.arange(T) < steps)[::-1].copy()
+
+
+def run_blocks(mdp, masks_of, n, kb, call):
+    """``(V0, log_lik)`` for ``n`` candidates in blocks of ``kb``: ``masks_of(block)`` gives the allowed
+    masks (X, A, k) of a slice of them, ``call(forbidden)`` runs a compiled scan on the (X, A, kb)
+    forbidden block (padded with the structural mask) and returns its (V, ll, infeasible)."""
+    import jax
+    X = mdp.n_states
     V0, log_lik = np.empty((X, n)), np.empty(n)
-    with jax.enable_x64(True):
-        args = [jnp.asarray(a) for a in (P, index, mdp.reward, mdp.terminal_reward)]
-        rev = [jnp.asarray(a[::-1].copy()) for a in (dx, da, valid)]
-        run = _kernel(kind)
 
-        def one(block):
-            masks = masks_of(block)
-            pad = kb - masks.shape[2]
-            forbidden = np.concatenate([~masks, np.broadcast_to(~mdp.allowed[:, :, None], (X, mdp.n_actions, pad))],
-                                       axis=2)
-            with jax.enable_x64(True):      # a thread-local setting: each worker enters it
-                out = run(*args, jnp.asarray(forbidden), *rev, **statics)
-                _collect((block, out), V0, log_lik)
+    def one(block):
+        masks = masks_of(block)
+        pad = kb - masks.shape[2]
+        forbidden = np.concatenate([~masks, np.broadcast_to(~mdp.allowed[:, :, None], (X, mdp.n_actions, pad))],
+                                   axis=2)
+        with jax.enable_x64(True):      # a thread-local setting: each worker enters it
+            _collect((block, call(forbidden)), V0, log_lik)
 
-        blocks = [slice(start, min(start + kb, n)) for start in range(0, n, kb)]
-        if len(blocks) == 1 or THREADS == 1:
-            for block in blocks:
-                one(block)
-        else:          # XLA releases the GIL while a block runs: one block per core at a time
-            with ThreadPoolExecutor(THREADS) as pool:
-                list(pool.map(one, blocks))
+    blocks = [slice(start, min(start + kb, n)) for start in range(0, n, kb)]
+    if len(blocks) == 1 or THREADS == 1:
+        for block in blocks:
+            one(block)
+    else:          # XLA releases the GIL while a block runs: one block per core at a time
+        with ThreadPoolExecutor(THREADS) as pool:
+            list(pool.map(one, blocks))
     return V0, log_lik
+
+
+def backup_blocks(mdp, form, masks_of, n, demos=None):
+    """Algorithm 4 for ``n`` candidate masks, compiled: ``masks_of(block)`` gives the allowed
+    masks Phi_C (X, A, k) of the candidates in ``block`` (a slice); ``form`` is the stencil form
+    (:func:`stencil_form`). Returns ``(V0, log_lik)``: V_{C,0} as (X, n) and the demonstrations'
+    log-likelihood (n,), -inf where infeasible."""
+    import jax
+    import jax.numpy as jnp
+
+    offsets, P = form
+    statics = dict(offsets=offsets, pad_lo=max(0, -min(offsets)), pad_hi=max(0, max(offsets)))
+    with jax.enable_x64(True):
+        args = [jnp.asarray(a) for a in (P, mdp.reward, mdp.terminal_reward)]
+        rev = [jnp.asarray(a) for a in demo_steps(mdp, demos)]
+        return run_blocks(mdp, masks_of, n, block_size(mdp, max(n, 1)),
+                          lambda forbidden: _kernel()(*args, jnp.asarray(forbidden), *rev, **statics))
 
 
 def _collect(item, V0, log_lik):

@@ -15,7 +15,8 @@ elsewhere by a sparse boolean product.
 import numpy as np
 import scipy.sparse as sp
 
-from . import fast
+from . import fast, gather as _gather
+from .reachable import restricted
 
 _KERNELS = {}
 GATHER_ROWS = 2 ** 14   # state-action pairs X * A from which a non-grid MDP uses the compiled gather form
@@ -28,8 +29,18 @@ def _kernel(kind):
         import jax
         import jax.numpy as jnp
 
-        def run(reaches, index, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
+        def run(reaches, index, extra, forbidden, dx, da, valid, offsets, pad_lo, pad_hi):
             X, A, W = forbidden.shape
+            extra_index, extra_reaches = extra
+
+            def refresh(dead):
+                """The gather form's auxiliary rows: dead if any of their successors is."""
+                if kind == "stencil":
+                    return dead
+                aux = jnp.zeros((extra_index.shape[0], W), dtype=jnp.uint32)
+                for e in range(extra_index.shape[1]):
+                    aux = aux | jnp.where(extra_reaches[:, e, None], dead[extra_index[:, e]], jnp.uint32(0))
+                return jax.lax.dynamic_update_slice_in_dim(dead, aux, X, axis=0)
 
             def step(carry, inputs):
                 dead, infeasible = carry
@@ -44,13 +55,15 @@ def _kernel(kind):
                     for j in range(reaches.shape[2]):
                         reach = reach | jnp.where(reaches[:, :, j, None], dead[index[:, :, j]], jnp.uint32(0))
                 bad = forbidden | reach
-                dead = bad[:, 0]
+                now = bad[:, 0]
                 for a in range(1, A):
-                    dead = dead & bad[:, a]
+                    now = now & bad[:, a]
+                dead = refresh(jax.lax.dynamic_update_slice_in_dim(dead, now, 0, axis=0))
                 lost = jax.lax.reduce(bad[x_t, a_t], jnp.uint32(0), jax.lax.bitwise_or, (0,))
                 return (dead, jnp.where(ok, infeasible | lost, infeasible)), None
 
-            init = (jnp.zeros((X, W), dtype=jnp.uint32), jnp.zeros(W, dtype=jnp.uint32))
+            rows = X + (extra_index.shape[0] if kind == "gather" else 0)
+            init = (refresh(jnp.zeros((rows, W), dtype=jnp.uint32)), jnp.zeros(W, dtype=jnp.uint32))
             (_, infeasible), _ = jax.lax.scan(step, init, (dx, da, valid))
             return infeasible
 
@@ -64,21 +77,14 @@ def _padded(words):
 
 def _run(kind, args, statics, words, dx, da, valid):
     import jax.numpy as jnp
-    return np.asarray(_kernel(kind)(*(jnp.asarray(a) for a in args), jnp.asarray(words), jnp.asarray(dx),
-                                    jnp.asarray(da), jnp.asarray(valid), **statics))
+    reaches, index, extra = args
+    return np.asarray(_kernel(kind)(jnp.asarray(reaches), jnp.asarray(index), tuple(jnp.asarray(a) for a in extra),
+                                    jnp.asarray(words), jnp.asarray(dx), jnp.asarray(da), jnp.asarray(valid), **statics))
 
 
 def _unpack(words, K):
     """(W,) uint32 words -> K booleans, candidate k in bit k % 32 of word k // 32."""
     return np.unpackbits(np.ascontiguousarray(words).view(np.uint8), bitorder="little")[:K].astype(bool)
-
-
-def _demo_steps(mdp, demos):
-    T = mdp.horizon
-    dx = np.zeros((T, demos.n), dtype=np.int32)
-    da = np.zeros_like(dx)
-    dx[: demos.steps], da[: demos.steps] = demos.states[:, :-1].T, demos.actions.T
-    return dx[::-1].copy(), da[::-1].copy(), (np.arange(T) < demos.steps)[::-1].copy()
 
 
 def infeasible_candidates(mdp, demos, base_mask, forbidden):
@@ -87,12 +93,15 @@ def infeasible_candidates(mdp, demos, base_mask, forbidden):
     forbidden, or reaching a dead state; module docstring). Returns (K,) booleans: exactly the
     candidates whose demonstration log-likelihood under Algorithm 4 is -inf."""
     base = np.asarray(base_mask, dtype=bool) & mdp.allowed
+    form = fast.stencil_form(mdp)
+    part = restricted(mdp, demos.states[:, 0]) if form is None else None
+    if part is not None:        # only the states the starts reach matter (:mod:`.reachable`)
+        mdp, demos, base, forbidden = part.mdp, part.demos(demos), part.mask(base), part.columns(forbidden)
     X, A = base.shape
     F = sp.coo_matrix(forbidden.reshape(X * A, -1) if not sp.issparse(forbidden) else forbidden)
     K = F.shape[1]
-    form = fast.stencil_form(mdp)
-    gather = fast.gather_form(mdp) if form is None and X * A >= GATHER_ROWS else None
-    dx, da, valid = _demo_steps(mdp, demos)
+    gather = _gather.gather_form(mdp) if form is None and X * A >= GATHER_ROWS else None
+    dx, da, valid = fast.demo_steps(mdp, demos)
     if form is not None or gather is not None:
         W = -(-K // 32)
         words = np.zeros((X * A, W), dtype=np.uint32)
@@ -101,10 +110,12 @@ def infeasible_candidates(mdp, demos, base_mask, forbidden):
         np.bitwise_or.at(words, (F.row[hit], F.col[hit] // 32), (np.uint32(1) << (F.col[hit] % 32).astype(np.uint32)))
         if form is not None:
             offsets, P = form
-            args, statics = (P > 0, np.zeros((1, 1, 1), dtype=np.int32)), dict(
+            none = (np.zeros((1, 1), dtype=np.int32), np.zeros((1, 1), dtype=bool))
+            args, statics = (P > 0, np.zeros((1, 1, 1), dtype=np.int32), none), dict(
                 offsets=offsets, pad_lo=max(0, -min(offsets)), pad_hi=max(0, max(offsets)))
             return _unpack(_run("stencil", args, statics, words.reshape(X, A, W), dx, da, valid), K)
-        args, statics = (gather.P > 0, gather.index), dict(offsets=(), pad_lo=0, pad_hi=0)
+        args = (gather.P > 0, gather.index, (gather.extra_index, gather.extra_P > 0))
+        statics = dict(offsets=(), pad_lo=0, pad_hi=0)
         out = [_run("gather", args, statics, _padded(words[:, w:w + GATHER_WORDS]).reshape(X, A, GATHER_WORDS),
                     dx, da, valid) for w in range(0, W, GATHER_WORDS)]       # one compiled shape for any K
         return _unpack(np.concatenate(out)[:W], K)

@@ -95,23 +95,24 @@ def box_regions(grid, plane=(0, 1), every=2, half_widths=None):
 
 
 def _bound_columns(mdp, grid, dim, bounds):
-    """S(x, a, R) (X*A, K) of bounds on coordinate ``dim``, from the successor's distribution over
-    that coordinate's cells (cumulative sums; no (X*A, X) x (X, K) product)."""
-    n, coords = grid.shape[dim], grid.coords(np.arange(grid.n_cells))[:, dim]
-    onehot = sp.csr_matrix((np.ones(grid.n_cells), (np.arange(grid.n_cells), coords)), shape=(grid.n_cells, n))
-    H = np.ascontiguousarray((mdp.transitions @ onehot).toarray().T)    # (n, X*A): S(x, a, coordinate cell j)
-    above, below = np.cumsum(H[::-1], axis=0)[::-1], np.cumsum(H, axis=0)   # S(x, a, index >= j), (<= j)
-    row_coord = np.repeat(coords, mdp.n_actions)
-    columns = []
-    for r in bounds:
+    """S(x, a, R) (X*A, K) of bounds on coordinate ``dim``: per bound, the probabilities of the entries
+    of S that lead from outside R into R, summed per row (entering R only; no (X*A, X) x (X, K) product)."""
+    coords = grid.coords(np.arange(grid.n_cells))[:, dim]
+    S = sp.csr_matrix(mdp.transitions)
+    row = np.repeat(np.arange(S.shape[0]), np.diff(S.indptr))
+    to, at = coords[S.indices], coords[row // mdp.n_actions]          # successor's and state's index
+    moves = {"upper": to > at, "lower": to < at}                     # only these entries can enter R
+    moves = {side: (row[m], to[m], at[m], S.data[m]) for side, m in moves.items()}
+    rows, cols, data = [], [], []
+    for k, r in enumerate(bounds):
         j = int(np.searchsorted(grid.centers_1d(dim), r.value, side="right"))   # cells above the bound: j..n-1
-        if 0 < j < n:
-            column = above[j] if r.side == "upper" else below[j - 1]
-        else:
-            column = np.full(H.shape[1], 1.0 if (j == 0) == (r.side == "upper") else 0.0)
-        inside = row_coord >= j if r.side == "upper" else row_coord < j
-        columns.append(sp.csc_matrix(np.where(inside, 0.0, column)[:, None]))       # entering R only
-    return sp.hstack(columns, format="csc")
+        row_, to_, at_, p_ = moves[r.side]
+        enters = (to_ >= j) & (at_ < j) if r.side == "upper" else (to_ < j) & (at_ >= j)
+        rows.append(row_[enters])
+        cols.append(np.full(rows[-1].size, k))
+        data.append(p_[enters])
+    return sp.csc_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(S.shape[0], len(bounds)))
 
 
 def _obstacle_columns(mdp, grid, obstacles):

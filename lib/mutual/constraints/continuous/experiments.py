@@ -157,10 +157,15 @@ def _child(fn, args, kwargs, queue):
     queue.put((result, time.perf_counter() - start, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
 
 
-def measured(fn, *args, **kwargs):
+def measured(fn, *args, fresh=True, **kwargs):
     """``(result, seconds, peak MiB)`` of ``fn(*args, **kwargs)`` run in a fresh process (spawned:
     the peak resident memory is that run's, plus the imported libraries). ``fn`` and its arguments
-    and result must pickle; ``fn`` must be importable (a module-level function)."""
+    and result must pickle; ``fn`` must be importable (a module-level function). ``fresh=False`` (a
+    quick run): in this process, without the start of a new one, and the peak memory is nan."""
+    if not fresh:
+        start = time.perf_counter()
+        result = fn(*args, **kwargs)
+        return result, time.perf_counter() - start, math.nan
     context = multiprocessing.get_context("spawn")
     queue = context.Queue()
     child = context.Process(target=_child, args=(fn, args, kwargs, queue))
@@ -182,9 +187,10 @@ def timed_inference(problem, recording, truth=(), **options):
             "candidates": len(run.candidates), **summary(run, list(truth)), "regions": run.chosen_regions()}
 
 
-def idle_memory():
-    """Peak resident memory (MiB) of a fresh process that only imports the libraries and compiles nothing."""
-    return measured(_nothing)[2]
+def idle_memory(fresh=True):
+    """Peak resident memory (MiB) of a fresh process that only imports the libraries and compiles nothing
+    (nan without ``fresh``: a quick run starts no process)."""
+    return measured(_nothing, fresh=fresh)[2]
 
 
 def _nothing():

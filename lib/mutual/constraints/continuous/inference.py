@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .. import fast
+from .. import gather
 from ..inference import greedy_inference
 from .candidates import families_regions, region_candidates
 from .discretization import discretize
@@ -73,7 +73,7 @@ class ContinuousInference:
 def choose_engine(mdp, n_candidates):
     """"gather" (compiled) for large backups when the MDP has few successors per state-action, else "numpy"."""
     work = mdp.n_states * mdp.n_actions * max(n_candidates, 1) * mdp.horizon
-    return "gather" if work >= GATHER_WORK and fast.gather_form(mdp) is not None else "numpy"
+    return "gather" if work >= GATHER_WORK and gather.gather_form(mdp) is not None else "numpy"
 
 
 def infer(problem, recording, families=("bound",), rounds=5, min_gain=0.1, transitions=None, truncate=False,
