@@ -207,10 +207,8 @@ def log_ratio_prefix(us, gaussian0, gaussian1, name="us"):
     return _representable(out, name, "the log-likelihood ratio")
 
 
-def lq_chains(dynamics, costs, x0, N):
-    """The exact Gaussians ``P(u | H_i)`` of eq. (6.8) (one :class:`ChainGaussian` per cost) for linear
-    dynamics (a :class:`mutual.motion.legible.LinearDynamics`) and quadratic costs (``QuadraticCost``s)
-    from ``x0`` over ``N`` steps: one batched Riccati backward pass for all of them."""
+def check_x0_N(dynamics, x0, N):
+    """``x0`` as a finite state of ``dynamics`` (a LinearDynamics) and ``N`` a positive integer, or a ValueError."""
     if not hasattr(dynamics, "stages") or not hasattr(dynamics, "n"):
         raise ValueError(f"dynamics must be a LinearDynamics, got {type(dynamics).__name__}")
     if not isinstance(N, (int, np.integer)) or isinstance(N, bool) or N < 1:
@@ -218,6 +216,14 @@ def lq_chains(dynamics, costs, x0, N):
     x0 = np.asarray(x0, float)
     if x0.shape != (dynamics.n,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"x0 must be a finite vector of length {dynamics.n}, got {x0!r}")
+    return x0
+
+
+def lq_chains(dynamics, costs, x0, N):
+    """The exact Gaussians ``P(u | H_i)`` of eq. (6.8) (one :class:`ChainGaussian` per cost) for linear
+    dynamics (a :class:`mutual.motion.legible.LinearDynamics`) and quadratic costs (``QuadraticCost``s)
+    from ``x0`` over ``N`` steps: one batched Riccati backward pass for all of them."""
+    x0 = check_x0_N(dynamics, x0, N)
     dyn = dynamics.stages(0, N)
     n, m = dyn.n, dyn.m
     cs = [cost.stages(0, N) for cost in costs]

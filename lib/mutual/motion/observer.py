@@ -11,18 +11,7 @@ allocating, sizes beyond :data:`mutual.motion.chain.DENSE_LIMIT_BYTES`."""
 
 import numpy as np
 
-from .chain import check_dense_size, log_ratio_prefix, lq_chains
-
-
-def _check_x0_N(dynamics, x0, N):
-    if not hasattr(dynamics, "stages") or not hasattr(dynamics, "n"):
-        raise ValueError(f"dynamics must be a LinearDynamics, got {type(dynamics).__name__}")
-    if not isinstance(N, (int, np.integer)) or isinstance(N, bool) or N < 1:
-        raise ValueError(f"N must be a positive integer, got {N!r}")
-    x0 = np.asarray(x0, float)
-    if x0.shape != (dynamics.n,) or not np.all(np.isfinite(x0)):
-        raise ValueError(f"x0 must be a finite vector of length {dynamics.n}, got {x0!r}")
-    return x0
+from .chain import check_dense_size, check_x0_N, log_ratio_prefix, lq_chains
 
 
 def _check_controls(dynamics, us, name="us"):
@@ -38,7 +27,7 @@ def _check_controls(dynamics, us, name="us"):
 def lifted_dynamics(dynamics, x0, N):
     """``x_k = Phi_k x0 + G_k u`` for the stacked controls ``u`` (N m,): returns ``(Phi x0, G)``
     with shapes (N+1, n) and (N+1, n, N m)."""
-    x0 = _check_x0_N(dynamics, x0, N)
+    x0 = check_x0_N(dynamics, x0, N)
     check_dense_size(N, dynamics.m, dynamics.n, "the lifted (dense) form over all stages")
     dyn = dynamics.stages(0, N)
     n, m = dyn.n, dyn.m
