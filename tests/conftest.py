@@ -9,6 +9,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from pathlib import Path
 
 import nbformat
@@ -39,6 +40,7 @@ class NotebookLane:
         self.stems = [s for s in sorted(stems) if not s.startswith("00_")] + sorted(s for s in stems if s.startswith("00_"))
         self.done = {stem: threading.Event() for stem in self.stems}
         self.outcome, self.process, self.stopped = {}, None, False
+        self.seconds, self.waited = {}, 0.0
         self.thread = threading.Thread(target=self._run, daemon=True, name="notebook lane")
 
     def _run(self):
@@ -48,8 +50,10 @@ class NotebookLane:
                     break
                 command = [sys.executable, "-m", "mutual.compendium.notebooks", "--quick", "--output", str(LANE_OUTPUT),
                            str(NOTEBOOKS / f"{stem}.ipynb")]
+                start = time.monotonic()
                 self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
                 out, err = self.process.communicate()
+                self.seconds[stem] = time.monotonic() - start
                 self.outcome[stem] = (self.process.returncode, (err.strip() or out.strip()).splitlines()[-1:])
                 self.done[stem].set()
         finally:  # whatever happened, nobody waits forever
@@ -57,7 +61,9 @@ class NotebookLane:
                 event.set()
 
     def wait(self, stem):
+        start = time.monotonic()
         self.done[stem].wait()
+        self.waited += time.monotonic() - start
         return self.outcome.get(stem, (1, ["the session stopped before this notebook ran"]))
 
     def stop(self):
@@ -98,6 +104,15 @@ def pytest_collection_modifyitems(session, config, items):
     config._notebook_lane = lane
     if lane.stems and not config.option.collectonly:
         lane.thread.start()
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    """Where the notebook lane's time went: each quick run's wall time, and how long the tests waited for it."""
+    lane = getattr(config, "_notebook_lane", None)
+    if lane is not None and lane.seconds:
+        runs = ", ".join(f"{stem[:2]} {sec:.0f} s" for stem, sec in lane.seconds.items())
+        terminalreporter.write_line(f"notebook lane (quick runs, wall): {runs}; total {sum(lane.seconds.values()):.0f} s; "
+                                    f"the tests waited {lane.waited:.0f} s for it")
 
 
 def pytest_sessionfinish(session):
