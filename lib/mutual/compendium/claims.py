@@ -55,16 +55,22 @@ _RULES = {"computed": _CHECKS, "independent": _CHECKS, "thesis-numbers": _CHECKS
 _PASS = {"independent": "verified", "thesis-numbers": "consistent", "construction": "holds by construction"}
 
 
-def load_claims(path=None):
-    """Read and validate the claims table (default ``data/paper_claims.csv``)."""
-    path = path or paths.CLAIMS
+def _read_table(path, columns, kind):
+    """A table of text cells with ``columns`` and unique ids, or a ValueError naming the file."""
     df = pd.read_csv(path, dtype=str, keep_default_na=False)
-    missing = [c for c in COLUMNS if c not in df.columns]
+    missing = [c for c in columns if c not in df.columns]
     if missing:
         raise ValueError(f"{path}: missing columns {missing}")
     dup = df["id"][df["id"].duplicated()].tolist()
     if dup:
-        raise ValueError(f"{path}: duplicate claim ids {dup}")
+        raise ValueError(f"{path}: duplicate {kind} ids {dup}")
+    return df
+
+
+def load_claims(path=None):
+    """Read and validate the claims table (default ``data/paper_claims.csv``)."""
+    path = path or paths.CLAIMS
+    df = _read_table(path, COLUMNS, "claim")
     for claim in df.to_dict("records"):
         _parse_rule(claim)
     return df
@@ -74,13 +80,7 @@ def load_settings(path=None):
     """Read and validate the settings table (default ``data/paper_settings.csv``): every setting
     names the thesis lines that fix it."""
     path = path or paths.SETTINGS
-    df = pd.read_csv(path, dtype=str, keep_default_na=False)
-    missing = [c for c in SETTING_COLUMNS if c not in df.columns]
-    if missing:
-        raise ValueError(f"{path}: missing columns {missing}")
-    dup = df["id"][df["id"].duplicated()].tolist()
-    if dup:
-        raise ValueError(f"{path}: duplicate setting ids {dup}")
+    df = _read_table(path, SETTING_COLUMNS, "setting")
     unsourced = df["id"][df["lines"].str.strip() == ""].tolist()
     if unsourced:
         raise ValueError(f"{path}: settings {unsourced} name no thesis lines")
