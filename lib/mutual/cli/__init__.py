@@ -1,4 +1,4 @@
-"""The ``mutual`` command line: the thesis's methods on your own data (issue 11).
+"""The ``mutual`` command line: the thesis's methods on your own data.
 
 ::
 

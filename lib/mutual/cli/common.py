@@ -25,6 +25,19 @@ class OutputError(Exception):
     """The outputs could not be written (a full disk, say); nothing was left in --out: one line, exit status 1."""
 
 
+def command_group(subparsers, name, help, description):
+    """Add the group ``mutual NAME`` and return its commands (one of which must be given)."""
+    group = subparsers.add_parser(name, help=help, description=description)
+    return group.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
+
+
+def add_command(commands, name, help, description, example):
+    """Add a command to a group: ``description`` and ``example`` shown in ``--help`` as they are written."""
+    import argparse
+    return commands.add_parser(name, help=help, description=description, epilog=example,
+                               formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
 def add_output_options(parser):
     """``--out DIR``, ``--json`` and ``--no-progress`` on a command's parser."""
     group = parser.add_argument_group("output")

@@ -1,4 +1,4 @@
-"""``mutual constraints infer-continuous`` and ``mutual constraints simulate`` (issue 21).
+"""``mutual constraints infer-continuous`` and ``mutual constraints simulate``.
 
 ``infer-continuous`` reads recorded trajectories of a continuous system and its system file,
 discretizes the dynamics (:mod:`mutual.constraints.continuous`), proposes bounds, obstacles or cells
@@ -76,10 +76,8 @@ examples:
 
 def register(commands):
     """Add ``infer-continuous`` and ``simulate`` to the ``mutual constraints`` commands."""
-    import argparse
-    infer = commands.add_parser("infer-continuous", help="constraints from continuous trajectories (extension)",
-                                description=INFER_DESCRIPTION, epilog=INFER_EXAMPLE,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    infer = common.add_command(commands, "infer-continuous", "constraints from continuous trajectories (extension)",
+                               INFER_DESCRIPTION, INFER_EXAMPLE)
     infer.add_argument("trajectories", metavar="TRAJ.csv", help="the recorded trajectories (format: data/README.md)")
     infer.add_argument("--system", required=True, metavar="SYSTEM.toml", help="the system, its grid and task")
     infer.add_argument("--families", metavar="LIST", help="candidate families, comma-separated: bound, disk, box, cell "
@@ -101,9 +99,9 @@ def register(commands):
     dask.add_argument("--inline", action="store_true", help="in this process, without Dask")
     common.add_output_options(infer)
     infer.set_defaults(handler=run_infer_continuous, prog=infer.prog)
-    simulate = commands.add_parser("simulate", help="write demonstrations of a system or a gridworld to try inference",
-                                   description=SIMULATE_DESCRIPTION, epilog=SIMULATE_EXAMPLE,
-                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    simulate = common.add_command(commands, "simulate",
+                                  "write demonstrations of a system or a gridworld to try inference",
+                                  SIMULATE_DESCRIPTION, SIMULATE_EXAMPLE)
     source = simulate.add_mutually_exclusive_group(required=True)
     source.add_argument("--system", metavar="SYSTEM.toml", help="a continuous system (writes trajectories.csv)")
     source.add_argument("--world", metavar="WORLD.toml", help="a gridworld (writes demonstrations.csv)")
@@ -132,7 +130,7 @@ def _check_options(args):
 
 
 def _with_overrides(args, problem, system_path):
-    from ..constraints.continuous.experiments import with_cells
+    from ..constraints.continuous import with_cells
     if args.cells:
         try:
             cells = [int(c) for c in args.cells.split(",")]
@@ -151,7 +149,7 @@ def run_infer_continuous(args):
     _check_options(args)
     traj_path, system_path = common.existing_file(args.trajectories), common.existing_file(args.system)
     from ..constraints.continuous import infer, load_system, read_recording
-    from ..constraints.continuous.mapping import check_recording
+    from ..constraints.continuous import check_recording
     with common.about(system_path):
         spec = load_system(system_path)
     problem = _with_overrides(args, spec.problem, system_path)
@@ -180,7 +178,7 @@ def run_infer_continuous(args):
 
 
 def _report_inference(args, run, traj_path, system_path):
-    from ..constraints.continuous.plots import inference_figure
+    from ..constraints.continuous import inference_figure
     common.use_agg()
     table = run.ranking()
     chosen = run.chosen()
@@ -245,8 +243,8 @@ def run_simulate(args):
 
 def _simulate_system(args):
     import numpy as np
-    from ..constraints.continuous import demonstrators as dm
-    from ..constraints.continuous import load_system, parse_region, write_recording
+    from ..constraints.continuous import (load_system, mppi_rollouts, parse_region, rollout, soft_demonstrator,
+                                          starts_around, write_recording)
     path = common.existing_file(args.system)
     with common.about(path):
         spec = load_system(path)
@@ -259,15 +257,15 @@ def _simulate_system(args):
     n, seed = args.n or sim["n"], sim["seed"] if args.seed is None else args.seed
     kind = args.demonstrator or sim["demonstrator"]
     noise = sim["noise"] if args.noise is None else args.noise
-    starts = dm.starts_around(sim["start"], sim["spread"], n, seed)
+    starts = starts_around(sim["start"], sim["spread"], n, seed)
     with common.about(path), common.progress(args, total=1, desc=f"simulating ({kind})", unit="run") as bar:
         if kind == "soft":
-            demonstrator = dm.soft_demonstrator(problem, hidden, sim["fine_cells"], temperature=sim["temperature"])
-            recording = dm.rollout(demonstrator, starts, seed + 1, noise, sim["record_every"])
+            demonstrator = soft_demonstrator(problem, hidden, sim["fine_cells"], temperature=sim["temperature"])
+            recording = rollout(demonstrator, starts, seed + 1, noise, sim["record_every"])
         else:
-            recording = dm.mppi_rollouts(problem.replace(reward=_tempered(problem.reward, sim["temperature"])), hidden,
-                                         starts, seed + 1, sim["samples"], sim["plan_steps"], sim["sigma"], noise,
-                                         sim["record_every"], sim["margin"])
+            recording = mppi_rollouts(problem.replace(reward=_tempered(problem.reward, sim["temperature"])), hidden,
+                                      starts, seed + 1, sim["samples"], sim["plan_steps"], sim["sigma"], noise,
+                                      sim["record_every"], sim["margin"])
         bar.update(1)
     if args.no_controls:
         from dataclasses import replace
@@ -295,7 +293,7 @@ def _tempered(reward, temperature):
 
 def _grid_hidden(texts, grid):
     """Chapter 3's ground truth from "cell COL ROW [psi P]" and "action NAME"."""
-    from ..constraints.gridworld import GRID_ACTIONS
+    from ..constraints import GRID_ACTIONS
     states, psi, actions = [], [], []
     for text in texts:
         words = text.split()
@@ -319,7 +317,7 @@ def _grid_hidden(texts, grid):
 
 def _simulate_world(args):
     from ..constraints import constraint_mask, sample_demonstrations, write_demonstrations
-    from ..constraints.world import load_world
+    from ..constraints import load_world
     path = common.existing_file(args.world)
     with common.about(path):
         grid = load_world(path)

@@ -31,17 +31,14 @@ example:
 
 def register(subparsers):
     """Add ``mutual motion`` and its ``legible`` command."""
-    import argparse
-    parser = subparsers.add_parser("motion", help="legible motion between a goal and distractors (chapters 6-7)",
-                                   description="Robots informing humans through motion (chapters 6-7).")
-    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
-    legible = commands.add_parser("legible", help="legible LQR / iLQR trajectory from a TOML spec",
-                                  description=DESCRIPTION, epilog=EXAMPLE,
-                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = common.command_group(subparsers, "motion",
+                                    "legible motion between a goal and distractors (chapters 6-7)",
+                                    "Robots informing humans through motion (chapters 6-7).")
+    legible = common.add_command(commands, "legible", "legible LQR / iLQR trajectory from a TOML spec", DESCRIPTION,
+                                 EXAMPLE)
     legible.add_argument("spec", metavar="SPEC.toml", help="the legibility spec (format: data/README.md)")
     common.add_output_options(legible)
     legible.set_defaults(handler=run_legible, prog=legible.prog)
-    return parser
 
 
 def trajectory_table(spec, solution):
@@ -66,7 +63,7 @@ def trajectory_table(spec, solution):
 
 
 def run_legible(args):
-    from ..motion.spec import load_legible_spec, solve_legible
+    from ..motion import load_legible_spec, solve_legible
     path = common.existing_file(args.spec)
     with common.about(path):
         spec = load_legible_spec(path)

@@ -1,4 +1,4 @@
-"""``mutual study power``: plan a replication of the chapter 5 study (issue 16), in G*Power's words (issue 22).
+"""``mutual study power``: plan a replication of the chapter 5 study, in G*Power's words.
 
 Three answers, in :func:`run_power`:
 
@@ -192,9 +192,8 @@ def add_arguments(parser):
 
 def register(study_subparsers):
     """Add ``power`` to the ``mutual study`` command group."""
-    parser = study_subparsers.add_parser("power", help="power and sample size: G*Power's analytic and SIMULATED",
-                                         description=DESCRIPTION, epilog=EXAMPLE,
-                                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = common.add_command(study_subparsers, "power", "power and sample size: G*Power's analytic and SIMULATED",
+                                DESCRIPTION, EXAMPLE)
     add_arguments(parser)
     parser.set_defaults(handler=run_power, prog=parser.prog)
     return parser
@@ -242,13 +241,13 @@ def _checked(args):
 
 
 def gpower(args):
-    from ..study.power import gpower_table
+    from ..study import gpower_table
     sizes = parse_sizes(args.n) if args.n else []
     return gpower_table(args.m, args.f, args.rho, args.eps, args.alpha, sizes, args.power, n_max=MAX_N_ANALYTIC)
 
 
 def analytic(args):
-    from ..study.power import effect_size_from_f, replication_plan
+    from ..study import effect_size_from_f, replication_plan
     F, df1, df2 = args.from_f
     est = effect_size_from_f(F, int(df1), int(df2))
     return est, replication_plan(F, int(df1), int(df2), targets=tuple(args.power), alpha=args.alpha,
@@ -259,18 +258,19 @@ def simulate(args):
     sizes = parse_sizes(args.n or ["6:40:2", "11"], MAX_N_SIMULATED, "a simulated cohort")
     if args.cohorts > MAX_COHORTS:
         raise ValueError(f"--cohorts {args.cohorts:,}: more than {MAX_COHORTS:,}" + _cost(max(sizes), args.cohorts))
-    from ..study import cohort, cohort_power as cp, power_summary as ps, sweep
+    from ..study import (CohortSetting, CohortTask, TaskCache, code_version, implied_effect, power_table,
+                         recommendations, run_tasks, simulate_cohort, study_value_functions)
 
-    setting = cp.CohortSetting(mix=args.mix, noise_scale=args.noise,
-                               **({"n_scenes": 15, "trial_seconds": 20.0, "quick_grid": True} if args.quick else {}))
-    library, conservative = cohort.study_value_functions(quick=setting.quick_grid)
-    tasks = [cp.CohortTask(setting, c, max(sizes), args.seed) for c in range(args.cohorts)]
-    cache = None if args.no_cache else sweep.TaskCache(cp.code_version())
-    cohorts, stats = sweep.run_tasks(cp.simulate_cohort, tasks, shared=(library, conservative), cache=cache,
-                                     scheduler="inline" if args.inline else args.scheduler, workers=args.workers,
-                                     progress=not args.no_progress, desc="cohorts")
-    table = ps.power_table(cohorts, sizes, args.alpha)
-    return setting, sizes, table, ps.recommendations(table), ps.implied_effect(cohorts), stats
+    setting = CohortSetting(mix=args.mix, noise_scale=args.noise,
+                            **({"n_scenes": 15, "trial_seconds": 20.0, "quick_grid": True} if args.quick else {}))
+    library, conservative = study_value_functions(quick=setting.quick_grid)
+    tasks = [CohortTask(setting, c, max(sizes), args.seed) for c in range(args.cohorts)]
+    cache = None if args.no_cache else TaskCache(code_version())
+    cohorts, stats = run_tasks(simulate_cohort, tasks, shared=(library, conservative), cache=cache,
+                               scheduler="inline" if args.inline else args.scheduler, workers=args.workers,
+                               progress=not args.no_progress, desc="cohorts")
+    table = power_table(cohorts, sizes, args.alpha)
+    return setting, sizes, table, recommendations(table), implied_effect(cohorts), stats
 
 
 def run_power(args):
@@ -307,14 +307,14 @@ def _figure(table, setting, args):
     common.use_agg()
     import matplotlib.pyplot as plt
 
-    from ..study import power_plots
+    from ..study import finish_power_axes, plot_simulated_power
     from ..style import PALETTE
     fig, ax = plt.subplots(figsize=(6, 3.8))
     for test, colour in (("anova_gg", PALETTE["blue"]), ("tukey Standard-Learned", PALETTE["orange"]),
                          ("holm Standard-Learned", PALETTE["purple"])):
-        power_plots.plot_simulated_power(ax, table, test, test, colour)
-    power_plots.finish_power_axes(ax, f"SIMULATED power ({setting.label}, {args.cohorts} cohorts per N, 95% CI)",
-                                  sorted(table["n"].unique()))
+        plot_simulated_power(ax, table, test, test, colour)
+    finish_power_axes(ax, f"SIMULATED power ({setting.label}, {args.cohorts} cohorts per N, 95% CI)",
+                      sorted(table["n"].unique()))
     ax.legend(fontsize=7, loc="lower right")
     return fig
 

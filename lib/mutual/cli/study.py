@@ -46,13 +46,10 @@ example:
 
 def register(subparsers):
     """Add ``mutual study`` and its subcommands (``anova``, then ``EXTENSIONS``)."""
-    import argparse
-    parser = subparsers.add_parser("study", help="repeated-measures statistics of a user study (chapter 5)",
-                                   description="Statistics of a repeated-measures user study (chapter 5).")
-    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
-    anova = commands.add_parser("anova", help="repeated-measures ANOVA, Greenhouse-Geisser, Tukey and Holm",
-                                description=DESCRIPTION, epilog=EXAMPLE,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = common.command_group(subparsers, "study", "repeated-measures statistics of a user study (chapter 5)",
+                                    "Statistics of a repeated-measures user study (chapter 5).")
+    anova = common.add_command(commands, "anova", "repeated-measures ANOVA, Greenhouse-Geisser, Tukey and Holm",
+                               DESCRIPTION, EXAMPLE)
     anova.add_argument("data", metavar="DATA.csv", help="a CSV table with a header row")
     anova.add_argument("--dv", required=True, metavar="COL",
                        help="the numeric column to analyse; in a tidy trial table (columns measure, value) "
@@ -70,7 +67,6 @@ def register(subparsers):
     anova.set_defaults(handler=run_anova, prog=anova.prog)
     for name in EXTENSIONS:
         importlib.import_module(f"{__package__}.{name}").register(commands)
-    return parser
 
 
 def _filters(where):
@@ -181,7 +177,7 @@ def run_anova(args):
 def _figure(anova, pairwise, args):
     common.use_agg()
     import matplotlib.pyplot as plt
-    from ..study.plots import plot_condition_means
+    from ..study import plot_condition_means
     anova, unit = _plotted(anova)
     fig, ax = plt.subplots(figsize=(1.6 + 1.1 * len(anova.levels), 3.4))
     plot_condition_means(ax, anova, pairwise.rename(columns={"p_tukey": "p"}))

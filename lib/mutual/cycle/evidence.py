@@ -21,8 +21,8 @@ import pandas as pd
 
 from scipy import stats
 
-from ..motion.evident.vehicles import dubins_step
-from ..supervision.dubins import SPEED, TRUE_W_MAX, avoid_value_closed_form
+from ..motion import dubins_step
+from ..supervision import SPEED, TRUE_W_MAX, avoid_value_closed_form
 from .laplace import best_tail, posterior_over_time, prefix_log_likelihoods
 
 

@@ -9,8 +9,7 @@ eq. (2.19) from :func:`mutual.constraints.mdp.soft_policy`. The forward pass is 
 
 import numpy as np
 
-from ..constraints.demonstrations import Demonstrations
-from ..constraints.mdp import check_mask
+from ..constraints import Demonstrations, check_mask
 
 
 _ROUNDING = 1e-12  # a probability below this is the sums' rounding (e.g. 1 - 0.9999999999999999) and reported as 0

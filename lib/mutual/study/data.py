@@ -196,7 +196,7 @@ def _row_namer(df, where):
 
 def _validate_interventions(df, where):
     """Row-level checks of an interventions table (naming the row and column), then chapter 4's validator."""
-    from ..supervision.supervisor import OPTIONAL_COLUMNS, REQUIRED_COLUMNS, validate_interventions
+    from ..supervision import OPTIONAL_COLUMNS, REQUIRED_COLUMNS, validate_interventions
     _require(df, list(REQUIRED_COLUMNS), where)
     _numbers(df, "trial", where, whole=True, low=0, what="a non-negative whole number")
     _numbers(df, "time", where, low=0, what="a non-negative number of seconds")

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 from scipy import stats as sps
 
 from ..style import PALETTE
-from ..supervision.supervisor import NoisySupervisor
+from ..supervision import NoisySupervisor
 from .cohort import simulate_study, study_value_functions
 from .design import TREATMENTS
 from .misalignment import straight_approach_starts, supervised_approaches

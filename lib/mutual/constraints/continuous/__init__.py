@@ -20,12 +20,13 @@ chance thresholds and greedy inference:
 * :mod:`.experiments`, :mod:`.soft_hjb`, :mod:`.plots` -- notebook 09's measurements and figures.
 """
 
+from ...lazy import lazy_names
 from .candidates import RegionCandidates, bound_regions, box_regions, disk_regions, region_candidates
 from .demonstrators import mppi_rollouts, rollout, soft_demonstrator, starts_around
 from .discretization import discretize
 from .grid import Grid
 from .inference import ContinuousInference, boundary_errors, infer
-from .mapping import to_demonstrations
+from .mapping import check_recording, to_demonstrations
 from .problem import Problem, QuadraticReward
 from .recordings import Recording, read_recording, write_recording
 from .regions import Bound, Box, Disk, boundary_distance, parse_region
@@ -34,6 +35,13 @@ from .systems import SYSTEMS, System, integrate, named_system
 
 __all__ = ["SYSTEMS", "Bound", "Box", "ContinuousInference", "Disk", "Grid", "Problem", "QuadraticReward", "Recording",
            "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors", "box_regions",
-           "discretize", "disk_regions", "infer", "integrate", "load_system", "mppi_rollouts", "named_system",
-           "parse_region", "read_recording", "region_candidates", "rollout", "soft_demonstrator", "starts_around",
-           "system_from_mapping", "to_demonstrations", "write_recording"]
+           "check_recording", "convergence", "demos_sweep", "discretize", "disk_regions", "inference_figure", "infer",
+           "integrate", "load_system", "mppi_rollouts", "named_system", "parse_region", "read_recording", "refinement",
+           "region_candidates", "resolution_sweep", "rollout", "soft_demonstrator", "starts_around", "summary",
+           "system_from_mapping", "timed_inference", "to_demonstrations", "with_cells", "write_recording"]
+
+# notebook 09's measurements, the refinement, the soft HJB check and the figure, imported on first use
+__getattr__ = lazy_names(__name__, {
+    "with_cells": "experiments", "summary": "experiments", "resolution_sweep": "experiments",
+    "demos_sweep": "experiments", "timed_inference": "experiments", "refinement": "refine",
+    "convergence": "soft_hjb", "inference_figure": "plots"})
