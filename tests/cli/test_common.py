@@ -11,8 +11,6 @@ from mutual.cli import common, main
 
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
 STUDY = ROOT / "data" / "examples" / "study.csv"
 
 

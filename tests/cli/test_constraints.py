@@ -57,8 +57,6 @@ def test_constraints_infer_on_malformed_files(demos, world, phrases, tmp_path):
 
 
 SMALL_WORLD = 'width = 4\nheight = 3\nstart = [0, 0]\ngoal = [3, 0]\nslip = 0.1\n'
-
-
 SMALL_DEMOS = "demo,t,state,action\n0,0,0,0\n0,1,1,0\n0,2,2,0\n0,3,3,\n"
 
 

@@ -78,8 +78,6 @@ def test_study_anova_on_a_malformed_file_names_the_file_line_and_column(tmp_path
 
 
 STUDY_TEXT = "who,cond,y\ns1,a,1\ns1,b,2\ns2,a,2\ns2,b,4\ns3,a,3\ns3,b,3.5\n"
-
-
 ANOVA_ARGS = ["study", "anova", "data.csv", "--dv", "y", "--within", "cond", "--subject", "who"]
 
 
@@ -129,8 +127,6 @@ def test_bad_input_is_one_line_naming_what_is_wrong(files, argv, phrases, tmp_pa
 
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
 STUDY = ROOT / "data" / "examples" / "study.csv"
 
 

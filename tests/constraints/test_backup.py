@@ -140,17 +140,9 @@ def test_compiled_engine_stays_float64_over_many_blocks():
 
 
 G = gridworld(4, 4, (0, 0), (3, 0))
-
-
 MDP0 = G.mdp
-
-
 DEMOS = sample_demonstrations(MDP0, 5, rng=0)
-
-
 CAND = constraint_candidates(MDP0, DEMOS)
-
-
 X, A = MDP0.n_states, MDP0.n_actions
 
 

@@ -121,8 +121,6 @@ def test_lemma_321_fails_on_the_exact_likelihood_with_slip():
 
 
 G = gridworld(4, 4, (0, 0), (3, 0))
-
-
 MDP0 = G.mdp
 
 

@@ -89,11 +89,7 @@ def test_a_huge_state_in_the_demonstrations_is_named_as_written(tmp_path, text):
 
 
 G = gridworld(4, 4, (0, 0), (3, 0))
-
-
 MDP0 = G.mdp
-
-
 LOITER = GRID_ACTIONS.index("loiter")
 
 

@@ -137,14 +137,8 @@ def test_until_stops_greedy_early_with_the_same_choices():
 
 
 G = gridworld(4, 4, (0, 0), (3, 0))
-
-
 MDP0 = G.mdp
-
-
 DEMOS = sample_demonstrations(MDP0, 5, rng=0)
-
-
 CAND = constraint_candidates(MDP0, DEMOS)
 
 

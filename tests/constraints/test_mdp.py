@@ -159,14 +159,8 @@ def test_a_matrix_whose_rows_do_not_sum_to_one_in_its_own_precision_is_refused(d
 
 
 G = gridworld(4, 4, (0, 0), (3, 0))
-
-
 MDP0 = G.mdp
-
-
 X, A = MDP0.n_states, MDP0.n_actions
-
-
 SIMPLE = dict(transitions=np.ones((2, 1, 2)) / 2, reward=np.zeros((2, 1)), horizon=3)
 
 

@@ -14,8 +14,6 @@ from mutual.constraints.reachable import first_reached, restricted
 
 
 TOLERANCE = 1e-10
-
-
 LONG = (41, 44, 48, 53, 57)     # states whose action 0 has many successors
 
 

@@ -14,8 +14,6 @@ from mutual.constraints.world import load_world, world_from_mapping
 
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "data" / "examples" / "world.toml"
-
-
 BASE = {"width": 4, "height": 3, "start": [0, 0], "goal": [3, 0], "slip": 0.1}
 
 

@@ -122,20 +122,10 @@ def test_two_task_pooled_inference_is_the_library_pooled_greedy_inference(world)
 
 
 GRID = gridworld(3, 3, start=(0, 0), goal=(2, 0), slip=0.1, horizon=4)
-
-
 MDP = GRID.mdp
-
-
 T, X, A = MDP.horizon, MDP.n_states, MDP.n_actions
-
-
 DEMOS = Demonstrations(np.full((2, T + 1), GRID.state(*GRID.goal)), np.full((2, T), 8))      # loiter at the goal
-
-
 OTHER_GRID = gridworld(4, 4, start=(0, 0), goal=(3, 0), horizon=4)
-
-
 OTHER, OTHER_DEMOS = OTHER_GRID.mdp, Demonstrations(np.full((2, 5), OTHER_GRID.state(3, 0)), np.full((2, 4), 8))
 
 

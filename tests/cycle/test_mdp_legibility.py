@@ -111,20 +111,10 @@ def test_anticipatory_legibility_moves_evidence_earlier_at_a_cost():
 
 
 GRID = gridworld(3, 3, start=(0, 0), goal=(2, 0), slip=0.1, horizon=4)
-
-
 GRID_MDP = GRID.mdp
-
-
 GRID_T, GRID_X, GRID_A = GRID_MDP.horizon, GRID_MDP.n_states, GRID_MDP.n_actions
-
-
 UNIFORM = np.full((GRID_T, GRID_X, GRID_A), 1.0 / GRID_A)
-
-
 RATIO = np.zeros((GRID_T, GRID_X, GRID_A))
-
-
 MASK = np.ones((GRID_X, GRID_A), dtype=bool)
 
 

@@ -60,23 +60,11 @@ def test_time_to_confidence_and_posteriors():
 
 
 GRID = gridworld(3, 3, start=(0, 0), goal=(2, 0), slip=0.1, horizon=4)
-
-
 GRID_MDP = GRID.mdp
-
-
 GRID_T, GRID_X, GRID_A = GRID_MDP.horizon, GRID_MDP.n_states, GRID_MDP.n_actions
-
-
 UNIFORM = np.full((GRID_T, GRID_X, GRID_A), 1.0 / GRID_A)
-
-
 RATIO = np.zeros((GRID_T, GRID_X, GRID_A))
-
-
 MASK = np.ones((GRID_X, GRID_A), dtype=bool)
-
-
 DEMOS = Demonstrations(np.full((2, GRID_T + 1), GRID.state(*GRID.goal)), np.full((2, GRID_T), 8))      # loiter at the goal
 
 

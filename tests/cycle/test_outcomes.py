@@ -41,14 +41,8 @@ def test_sampled_rollouts_agree_with_the_forward_pass():
 
 
 GRID = gridworld(3, 3, start=(0, 0), goal=(2, 0), slip=0.1, horizon=4)
-
-
 GRID_MDP = GRID.mdp
-
-
 GRID_T, GRID_X, GRID_A = GRID_MDP.horizon, GRID_MDP.n_states, GRID_MDP.n_actions
-
-
 UNIFORM = np.full((GRID_T, GRID_X, GRID_A), 1.0 / GRID_A)
 
 

@@ -7,14 +7,8 @@ from pathlib import Path
 
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
 EXAMPLES = ROOT / "data" / "examples"
-
-
 MALFORMED = EXAMPLES / "malformed"
-
-
 SCRIPT = Path(sys.executable).with_name("mutual")
 
 

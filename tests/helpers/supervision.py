@@ -33,8 +33,6 @@ def head_on(values, rng):
 
 
 GRID = GridSpec(8.0, (41, 41, 24))
-
-
 STATES = np.array([[-3.0, 0.2, 0.0], [-2.5, -0.4, 0.1], [0.5, -3.2, 1.6]])
 
 

@@ -9,8 +9,6 @@ from mutual.motion.legible import reaching_cost, single_integrator
 
 
 DT, N = 0.01, 100
-
-
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])
 
 

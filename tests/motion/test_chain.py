@@ -18,8 +18,6 @@ from mutual.motion.trajopt.compiled import kernels
 
 
 TOL = 1e-9
-
-
 PROBLEMS = [(0, 2, 2, 10), (1, 3, 1, 7), (2, 1, 2, 15), (3, 4, 3, 5), (4, 2, 2, 1), (5, 2, 1, 40)]
 
 
@@ -212,8 +210,6 @@ def test_laplace_refuses_a_point_that_is_not_a_strict_minimum():
 
 
 G0, G1 = (-1.0, 1.0), (1.0, 1.0)
-
-
 X0 = np.zeros(2)
 
 

@@ -20,8 +20,6 @@ from helpers.lq import random_hypotheses, rollout
 
 
 DT, N = 0.01, 100
-
-
 X0 = np.zeros(2)
 
 
@@ -79,14 +77,8 @@ def test_weighted_prefix_log_likelihood_is_the_weighted_sum():
 
 
 SMALL_DT, SMALL_N = 0.1, 10
-
-
 SMALL_DYN = leg.single_integrator(2, SMALL_DT)
-
-
 SMALL_G0, SMALL_G1 = (-1.0, 1.0), (1.0, 1.0)
-
-
 SMALL_J0, SMALL_J1 = leg.reaching_cost(SMALL_G0, SMALL_DT), leg.reaching_cost(SMALL_G1, SMALL_DT)
 
 
@@ -108,8 +100,6 @@ def exact_log_lambda(us):
 
 # ---- the log-likelihood ratio: exact where the squares are not (class: answered, exact) ------------------
 RATIO = [1e16, 1e20, 1e200, 1e300, -1e16, 3.7e-3, 1e-170, 1e-300]
-
-
 RATIO_MIXED = [(1e-200, 1e200), (1.0, 1e300), (1e200, -1e200)]
 
 
@@ -194,17 +184,9 @@ def test_dense_sizes_are_refused_before_allocating(fn, args, kwargs, phrase):
 
 
 US = np.ones((SMALL_N, 2))
-
-
 NAN_US = US.copy()
-
-
 NAN_US[3, 1] = np.nan
-
-
 INF_US = US.copy()
-
-
 INF_US[0, 0] = np.inf
 
 

@@ -166,14 +166,8 @@ REACH_BASE = {"start": [0.0, 0.0], "goal": [1.0, 1.0], "distractors": [[-1.0, 1.
 
 
 QP = {"alpha": None, "goal": [0.0, 1.0], "distractors": [[-1.0, 1.0], [1.0, 1.0]]}
-
-
 DUBINS = {"dynamics": "dubins", "start": [0.0, 0.0, 1.5]}
-
-
 ANTICIPATION = {"anticipation": {"alpha_start": 0.5, "alpha_end": 2.0}}
-
-
 HUGE = 10 ** 400                       # a TOML integer that no float holds: OverflowError before
 
 

@@ -11,14 +11,8 @@ from mutual.compendium.results import resolve_computed_by
 
 
 CLAIMS = load_claims()
-
-
 BASIS = dict(zip(CLAIMS["id"], CLAIMS["basis"]))
-
-
 CHECKED = ("computed", "independent", "thesis-numbers", "construction", "undetermined")  # original-data rows: simulated
-
-
 CHAPTERS = sorted(p.stem for p in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb") if not p.name.startswith("00_"))
 
 

@@ -12,8 +12,6 @@ from mutual.compendium.paths import NOTEBOOKS
 
 
 NOTEBOOK_PATHS = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
-
-
 IDS = [p.stem for p in NOTEBOOK_PATHS]
 
 

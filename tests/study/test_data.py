@@ -99,17 +99,9 @@ def test_the_simulated_study_tables_write_the_same_bytes():
 
 
 HEADER = "participant,comparison,order,treatment,task_version,trial,measure,value\n"
-
-
 ROW = "P01,Standard-Learned,1,Standard,1,1,{measure},{value}\n"
-
-
 TRIALS_OK = HEADER + ROW.format(measure="false_positives", value=3)
-
-
 LONG = "subj,cond,score\n1,a,3\n1,b,4\n2,a,x\n2,b,5\n"
-
-
 IV_HEADER = "participant,trial,time,x,y,theta\n"
 
 

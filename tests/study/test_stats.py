@@ -327,8 +327,6 @@ def _long_table(values, levels=("a", "b", "c"), n=4):
 
 
 GOOD = _long_table(np.arange(12) % 5 + np.repeat([0, 2, 1, 3], 3))
-
-
 WIDE = pd.DataFrame({"a": [1.0, 2.0, 3.0, 5.0], "b": [2.0, 2.5, 4.5, 6.0], "c": [0.0, 1.0, 3.0, 2.0]})
 
 

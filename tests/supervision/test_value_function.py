@@ -13,8 +13,6 @@ from helpers.supervision import GRID, case_id, grid_states, small_library, small
 
 
 W_MAXES = 0.25 * np.arange(1, 13)
-
-
 RADIUS = 1.0
 
 

@@ -120,8 +120,6 @@ def test_hazard_feature_orders_the_optima_of_fig_7_1():
 
 
 TASK, W0, W1 = es.figure_scenario("7.1", steps=10)
-
-
 SMALL = dict(x0=[0.0, 0.0], goal=[1.0, 1.0])
 
 

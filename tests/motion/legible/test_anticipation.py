@@ -10,11 +10,7 @@ from mutual.motion.legible import anticipation, reaching_cost, single_integrator
 
 
 DT, N = 0.01, 100
-
-
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])
-
-
 X0 = np.zeros(2)
 
 
@@ -57,11 +53,7 @@ def test_inverse_square_schedule_is_what_the_t_minus_t_weighting_recovers(refere
 
 
 SMALL_DT, SMALL_N = 0.1, 10
-
-
 SMALL_DYN = leg.single_integrator(2, SMALL_DT)
-
-
 SMALL_J0, SMALL_J1 = leg.reaching_cost([-1.0, 1.0], SMALL_DT), leg.reaching_cost([1.0, 1.0], SMALL_DT)
 
 

@@ -10,8 +10,6 @@ from mutual.motion.legible.dragan import (goal_posterior, gradient_linear_struct
 
 
 GOALS = np.array([[-1.0, 1.0], [1.0, 1.0]])
-
-
 S = np.zeros(2)
 
 
@@ -145,17 +143,9 @@ def test_result_repr_is_short():
 
 
 DT, N = 0.1, 10
-
-
 X0 = np.zeros(2)
-
-
 XS = np.linspace([0.0, 0.0], [1.0, 1.0], N + 1)
-
-
 NAN_XS = XS.copy()
-
-
 NAN_XS[4, 0] = np.nan
 
 

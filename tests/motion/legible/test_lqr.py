@@ -159,14 +159,8 @@ def test_solution_repr_is_short():
 
 
 DT, N = 0.1, 10
-
-
 X0 = np.zeros(2)
-
-
 I2 = np.eye(2)
-
-
 SKEW_R = np.array([[1.0, 5.0], [-5.0, 1.0]])
 
 

@@ -14,11 +14,7 @@ from helpers.lq import random_cost, random_hypotheses, rollout
 
 
 DT, N = 0.01, 100
-
-
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])
-
-
 X0 = np.zeros(2)
 
 
@@ -188,14 +184,8 @@ def test_shared_quadratic_receding_horizon_matches_naive_replanning(every):
 
 
 SMALL_DT, SMALL_N = 0.1, 10
-
-
 SMALL_DYN = leg.single_integrator(2, SMALL_DT)
-
-
 SMALL_G0, SMALL_G1 = (-1.0, 1.0), (1.0, 1.0)
-
-
 SMALL_J0, SMALL_J1 = leg.reaching_cost(SMALL_G0, SMALL_DT), leg.reaching_cost(SMALL_G1, SMALL_DT)
 
 

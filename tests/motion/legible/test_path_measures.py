@@ -29,14 +29,8 @@ def test_path_measures_of_figure_6_3():
 
 
 SMALL_DT, SMALL_N = 0.1, 10
-
-
 XS = np.linspace([0.0, 0.0], [1.0, 1.0], SMALL_N + 1)
-
-
 NAN_XS = XS.copy()
-
-
 NAN_XS[4, 0] = np.nan
 
 

@@ -9,8 +9,6 @@ from mutual.motion.observer import lifted_cost
 
 
 DT, N = 0.01, 100
-
-
 X0 = np.zeros(2)
 
 

@@ -11,8 +11,6 @@ from helpers.lq import random_cost
 
 
 DT, N = 0.01, 100
-
-
 X0 = np.zeros(2)
 
 
@@ -34,29 +32,13 @@ def test_reprs_are_short(reference):
 
 
 SMALL_DT, SMALL_N = 0.1, 10
-
-
 SMALL_DYN = leg.single_integrator(2, SMALL_DT)
-
-
 SMALL_J0, SMALL_J1 = leg.reaching_cost([-1.0, 1.0], SMALL_DT), leg.reaching_cost([1.0, 1.0], SMALL_DT)
-
-
 US = np.ones((SMALL_N, 2))
-
-
 NAN_US = US.copy()
-
-
 NAN_US[3, 1] = np.nan
-
-
 XS = np.linspace([0.0, 0.0], [1.0, 1.0], SMALL_N + 1)
-
-
 I2 = np.eye(2)
-
-
 SKEW_R = np.array([[1.0, 5.0], [-5.0, 1.0]])
 
 

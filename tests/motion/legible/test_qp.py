@@ -12,11 +12,7 @@ from mutual.motion.legible.qp import multi_distractor_qp
 
 
 DT, N = 0.01, 100
-
-
 G0, G1 = np.array([-1.0, 1.0]), np.array([1.0, 1.0])
-
-
 X0 = np.zeros(2)
 
 
@@ -82,11 +78,7 @@ def test_sparse_qp_equals_dense_qp():
 
 
 SMALL_DT, SMALL_N = 0.1, 10
-
-
 SMALL_DYN = leg.single_integrator(2, SMALL_DT)
-
-
 SMALL_J0, SMALL_J1 = leg.reaching_cost([-1.0, 1.0], SMALL_DT), leg.reaching_cost([1.0, 1.0], SMALL_DT)
 
 

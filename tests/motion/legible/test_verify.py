@@ -11,8 +11,6 @@ from mutual.motion.observer import likelihood_ratio_minimiser
 
 
 DT, N = 0.01, 100
-
-
 X0 = np.zeros(2)
 
 
