@@ -4,6 +4,8 @@ sampled rollouts against the forward pass; bad inputs (a table)."""
 import numpy as np
 import pytest
 
+from mutual.constraints import sample_demonstrations, soft_policy
+from mutual.constraints.demonstrations import categorical
 from mutual.constraints.gridworld import gridworld
 from mutual.cycle.outcomes import policy_outcomes, rollout_outcomes, sample_rollouts
 
@@ -38,6 +40,17 @@ def test_sampled_rollouts_agree_with_the_forward_pass():
         se = np.sqrt(exact[key] * (1 - exact[key]) / 40000)
         assert abs(sampled[key] - exact[key]) < 5 * se + 1e-9, key
     assert sampled["expected_reward"] == pytest.approx(exact["expected_reward"], abs=0.05)
+
+
+def test_rollouts_of_the_soft_policy_are_the_demonstrations_of_the_same_seed():
+    """One sampler: rolling out chapter 2's soft policy draws the same trajectories, in the same order, as
+    sampling demonstrations with the same seed; a dead state's all-zero row falls back to the last action."""
+    mdp = gridworld(4, 3, start=(0, 0), goal=(3, 0), slip=0.2, horizon=6).mdp
+    rollouts = sample_rollouts(mdp, soft_policy(mdp), 50, rng=3)
+    demos = sample_demonstrations(mdp, 50, rng=3)
+    np.testing.assert_array_equal(rollouts.states, demos.states)
+    np.testing.assert_array_equal(rollouts.actions, demos.actions)
+    assert categorical(np.zeros((3, 4)), np.random.default_rng(0)).tolist() == [3, 3, 3]
 
 
 GRID = gridworld(3, 3, start=(0, 0), goal=(2, 0), slip=0.1, horizon=4)

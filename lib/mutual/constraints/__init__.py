@@ -13,7 +13,8 @@ from .backup import (algorithm_agreement, log_partition, log_partition_literal, 
                      state_action_visitation, value_ratio)
 from .candidates import Candidates, as_tasks, constraint_candidates
 from .chance import constraint_mask, lemma_321_exact, max_likelihood_thresholds, psi_star_by_loop
-from .demonstrations import Demonstrations, load_demonstrations, sample_demonstrations, write_demonstrations
+from .demonstrations import (Demonstrations, load_demonstrations, sample_demonstrations, sample_trajectories,
+                             write_demonstrations)
 from .gridworld import GRID_ACTIONS, Gridworld, gridworld
 from .inference import InferenceResult, greedy_inference, score_candidates
 from .mdp import MDP, check_mask, expected_next, masked_logsumexp, soft_bellman_backup, soft_policy
@@ -24,7 +25,7 @@ __all__ = ["GRID_ACTIONS", "MDP", "Candidates", "Demonstrations", "Gridworld", "
            "greedy_inference", "gridworld", "gridworld_ranking_work", "lemma_321_exact", "load_demonstrations",
            "load_world", "log_partition", "log_partition_literal", "masked_logsumexp", "max_likelihood_thresholds",
            "plot_actions", "plot_states", "psi_star_by_loop", "rank_candidates", "sample_demonstrations",
-           "score_candidates", "soft_bellman_backup", "soft_policy", "state_action_visitation",
+           "sample_trajectories", "score_candidates", "soft_bellman_backup", "soft_policy", "state_action_visitation",
            "value_ratio", "write_demonstrations"]
 
 # the world file, the figures and the independent checks of chapters 2-3, imported on first use

@@ -105,19 +105,26 @@ def sample_demonstrations(mdp, n, mask=None, rng=None):
     pi = soft_policy(mdp, check_mask(mdp, mask))
     if np.any(pi[0].sum(axis=1)[mdp.initial > 0] == 0):
         raise ValueError("mask: no trajectory from some initial state satisfies the constraints (V = -inf)")
+    return sample_trajectories(mdp, pi, n, rng)
+
+
+def sample_trajectories(mdp, policy, n, rng):
+    """``n`` trajectories of T steps of ``policy`` (T, X, A) from ``mdp.initial`` (``rng``: a Generator): the
+    start, then at each step every trajectory's action and next state, each one :func:`categorical` draw."""
     T, X, A = mdp.horizon, mdp.n_states, mdp.n_actions
     states = np.empty((n, T + 1), dtype=np.int64)
     actions = np.empty((n, T), dtype=np.int64)
-    states[:, 0] = _draw(np.broadcast_to(mdp.initial, (n, X)), rng)
+    states[:, 0] = categorical(np.broadcast_to(mdp.initial, (n, X)), rng)
     for t in range(T):
-        actions[:, t] = _draw(pi[t, states[:, t]], rng)
+        actions[:, t] = categorical(policy[t, states[:, t]], rng)
         rows = mdp.transitions[states[:, t] * A + actions[:, t]]
-        states[:, t + 1] = _draw(rows.toarray() if mdp.is_sparse else rows, rng)
+        states[:, t + 1] = categorical(rows.toarray() if mdp.is_sparse else rows, rng)
     return Demonstrations(states, actions)
 
 
-def _draw(probs, rng):
-    """One categorical draw per row of ``probs`` (rows sum to 1)."""
+def categorical(probs, rng):
+    """One draw per row of ``probs`` by inverting its cumulative sum with one uniform number per row (rows
+    summing to 1; an all-zero row gives the last index)."""
     cdf = np.cumsum(probs, axis=1)
     u = rng.random(probs.shape[0]) * cdf[:, -1]
     return np.minimum((cdf <= u[:, None]).sum(axis=1), probs.shape[1] - 1)
