@@ -194,11 +194,12 @@ class ValueFunction:
         return float(-(x0 + (x1 - x0) * v0 / (v0 - v1)))
 
 
-def _interpolate(spec, flat_values, states, fill_value):
-    """Trilinear interpolation of each row of ``flat_values`` (b, nx*ny*nt) at ``states`` -> (b, n)."""
-    s = check_states(states)
+def trilinear(spec, states, node_values):
+    """Trilinear interpolation on the grid ``spec`` at ``states`` (n, 3) (checked), periodic in theta: the
+    eight nodes around each state weighted by their distances, ``node_values(ix, iy, it)`` giving the values
+    at nodes (index arrays of n). Outside the (x, y) domain it extrapolates from the border cells."""
     nx, ny, nt = spec.shape
-    pos = (s - spec.lo) / spec.spacings
+    pos = (states - spec.lo) / spec.spacings
     ix = np.clip(np.floor(pos[:, 0]).astype(int), 0, nx - 2)
     iy = np.clip(np.floor(pos[:, 1]).astype(int), 0, ny - 2)
     it = np.floor(pos[:, 2]).astype(int)
@@ -207,8 +208,16 @@ def _interpolate(spec, flat_values, states, fill_value):
     result = 0.0
     for dx, fx in ((0, 1 - wx), (1, wx)):
         for dy, fy in ((0, 1 - wy), (1, wy)):
-            base = ((ix + dx) * ny + iy + dy) * nt
-            result = result + fx * fy * ((1 - wt) * flat_values[:, base + it0] + wt * flat_values[:, base + it1])
+            result = result + fx * fy * ((1 - wt) * node_values(ix + dx, iy + dy, it0)
+                                         + wt * node_values(ix + dx, iy + dy, it1))
+    return result
+
+
+def _interpolate(spec, flat_values, states, fill_value):
+    """Trilinear interpolation of each row of ``flat_values`` (b, nx*ny*nt) at ``states`` -> (b, n)."""
+    s = check_states(states)
+    _, ny, nt = spec.shape
+    result = trilinear(spec, s, lambda ix, iy, it: flat_values[:, (ix * ny + iy) * nt + it])
     inside = np.all(np.abs(s[:, :2]) <= spec.half_width, axis=1)
     return np.where(inside, result, fill_value)
 
