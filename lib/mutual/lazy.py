@@ -7,16 +7,14 @@ stays free of JAX and ``import mutual.constraints`` stays NumPy and SciPy alone.
 """
 
 import importlib
-import sys
 
 
 def lazy_names(package, table):
-    """The ``__getattr__`` of ``package`` that reads ``name`` from ``package.<table[name]>`` on first use
-    and keeps it in the package (later reads are plain attribute reads)."""
+    """The ``__getattr__`` of ``package`` that reads ``name`` from ``package.<table[name]>``, importing that
+    module on first use. Nothing is copied into the package, so the face always hands out what the module
+    holds now (a test that patches ``mutual.motion.spec.solve_legible`` patches ``mutual.motion``'s too)."""
     def __getattr__(name):
         if name not in table:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(f"{package}.{table[name]}"), name)
-        setattr(sys.modules[package], name, value)
-        return value
+        return getattr(importlib.import_module(f"{package}.{table[name]}"), name)
     return __getattr__
