@@ -14,6 +14,8 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
+from .. import budget
+
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
@@ -34,6 +36,11 @@ def add_output_options(parser):
     group.add_argument("--json", action="store_true",
                        help="print the results as one JSON object on stdout instead of the readable summary")
     group.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    size = parser.add_argument_group("size")
+    size.add_argument("--allow-large", action="store_true",
+                      help="go ahead even when the work is estimated to need more memory than is available, or more "
+                           f"than ${budget.MINUTES_ENV} minutes (default {budget.MINUTES}); without it such a request "
+                           "is refused before it starts, with the estimate")
 
 
 def existing_file(path):
@@ -53,7 +60,7 @@ def about(path):
     import pandas as pd
     try:
         yield
-    except InputError:
+    except (InputError, budget.TooLarge):
         raise
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: the file is empty (expected a header row and data rows)") from None
@@ -280,12 +287,25 @@ def report(args, summary, results):
 def run(args, prog):
     """Run ``args.handler(args)``; report bad input in one line (exit 2), never a traceback.
 
+    Every command runs within the limits of :mod:`mutual.budget` (``$MUTUAL_MAX_MINUTES`` and the memory
+    available; ``--allow-large`` lifts them): a request estimated beyond them is refused before it starts.
     Set ``MUTUAL_DEBUG=1`` to see the traceback of an unexpected error.
     """
     try:
         check_out(args)
-        args.handler(args)
+        try:
+            minutes = budget.command_line_minutes()
+        except ValueError as err:
+            raise InputError(str(err)) from None
+        with budget.limits(minutes, getattr(args, "allow_large", False), "--allow-large"):
+            args.handler(args)
         return EXIT_OK
+    except budget.TooLarge as err:
+        return _fail(prog, str(err), EXIT_BAD_INPUT)
+    except MemoryError as err:        # what the estimate missed: one line, never a traceback
+        detail = f" ({_first_line(err)})" if str(err) else ""
+        return _fail(prog, f"ran out of memory{detail}; ask for less (fewer cells, steps, levels or demonstrations)",
+                     EXIT_FAILED)
     except InputError as err:
         return _fail(prog, str(err), EXIT_BAD_INPUT)
     except OutputError as err:
