@@ -42,6 +42,7 @@ SOFT_BACKUP_SECONDS = 5e-9       # one (step, successor entry) of a soft Bellman
 LQ_STEP_SECONDS = 7e-5           # one step of one hypothesis of the legible LQ solve and its evidence
 ILQR_STEP_SECONDS = 5e-4         # one step of one hypothesis of the Dubins car's legible iLQR
 HJ_NODE_SECONDS = 2.3e-5         # one grid node of one value function (hj-reachability, to convergence)
+CLOSED_FORM_NODE_SECONDS = 2e-7  # one grid node of one value function in closed form
 PARTICIPANT_SECONDS = 0.32       # one simulated participant of the power sweep (full grid, 60-s trials)
 GRID_BACKUP_SECONDS = 4e-8       # one (round, candidate, step, state, action) of gridworld inference
 
@@ -64,7 +65,7 @@ class Estimate:
     knob: str
 
     def __str__(self):
-        return f"{self.what} needs about {memory(self.bytes)} and {duration(self.seconds)}"
+        return f"{self.what}: about {memory(self.bytes)} of memory and {duration(self.seconds)}"
 
 
 class TooLarge(ValueError):
@@ -165,7 +166,7 @@ def check(estimate, allow_large=None, minutes=None):
     minutes = stated if minutes is None else minutes
     free = available_bytes()
     if estimate.bytes > free:
-        raise TooLarge(estimate, f"{memory(free)} of memory are available")
+        raise TooLarge(estimate, f"{memory(free)} are available")
     if minutes is not None and estimate.seconds > 60 * minutes:
         raise TooLarge(estimate, f"the limit is {minutes:g} minutes")
     return estimate
@@ -275,12 +276,14 @@ def legible(steps, hypotheses, dynamics="single-integrator"):
                     "use fewer steps or fewer distractors")
 
 
-def value_library(members, shape):
-    """A library of ``members`` avoid value functions on a grid of ``shape`` nodes (float32, solver state)."""
-    nodes = _product(shape)
-    return Estimate(f"{int(members):,} value functions on {_x(shape)} nodes", 4.0 * nodes * (members + 12),
-                    HJ_NODE_SECONDS * nodes * members, "use fewer library members (--w-max) or a smaller grid "
-                    "(--grid quick)")
+def value_library(members, shape, computed=None, method="hj"):
+    """A library of ``members`` avoid value functions on a grid of ``shape`` nodes (float32, solver state), of
+    which ``computed`` (default all) are solved: by hj-reachability (``method="hj"``) or in closed form."""
+    nodes, computed = _product(shape), members if computed is None else computed
+    per_node = HJ_NODE_SECONDS if method == "hj" else CLOSED_FORM_NODE_SECONDS
+    return Estimate(f"{int(members):,} value functions on {_x(shape)} nodes ({int(computed):,} to compute)",
+                    4.0 * nodes * (members + 12), per_node * nodes * computed,
+                    "use fewer library members (--w-max) or a smaller grid (--grid quick)")
 
 
 def power_simulation(cohorts, participants, workers=1):

@@ -21,6 +21,7 @@ import argparse
 import math
 import sys
 
+from .. import budget
 from . import common
 
 PROG = "mutual study power"
@@ -259,6 +260,9 @@ def simulate(args):
     sizes = parse_sizes(args.n or ["6:40:2", "11"], MAX_N_SIMULATED, "a simulated cohort")
     if args.cohorts > MAX_COHORTS:
         raise ValueError(f"--cohorts {args.cohorts:,}: more than {MAX_COHORTS:,}" + _cost(max(sizes), args.cohorts))
+    import os
+    workers = 1 if args.inline else (args.workers or os.cpu_count() or 1)
+    budget.check(budget.power_simulation(args.cohorts, max(sizes), workers))
     from ..study import cohort, cohort_power as cp, power_summary as ps, sweep
 
     setting = cp.CohortSetting(mix=args.mix, noise_scale=args.noise,
