@@ -1,9 +1,10 @@
-"""Monte Carlo sweeps on Dask (issue 16): the same code on 2 cores or on a cluster.
+"""Monte Carlo sweeps on Dask: the same code on 2 cores or on a cluster.
 
-:func:`run_tasks` maps a task function over task objects on a ``dask.distributed`` cluster:
+:func:`run_tasks` maps a task function over task objects with :func:`mutual.parallel.map_tasks`:
 
-* by default an embedded ``LocalCluster`` with one single-threaded worker process per core;
-* or an existing cluster reached by address: ``scheduler="tcp://host:8786"``, or the
+* by default on an embedded private cluster, one single-threaded worker process per core, that accepts
+  only this process (TLS with a throwaway certificate; :func:`mutual.parallel.private_cluster`);
+* or on an existing cluster reached by address: ``scheduler="tcp://host:8786"``, or the
   ``MUTUAL_DASK_SCHEDULER`` environment variable (start one with ``dask scheduler`` and
   ``dask worker tcp://host:8786`` on each machine, or with dask-jobqueue on SLURM: README);
 * or ``scheduler="inline"``: in this process, without Dask (a reference and for debugging).
@@ -19,59 +20,15 @@ whatever the number of workers or the order they finish in. Progress is shown wi
 
 import hashlib
 import json
-import logging
-import os
 import time
 import warnings
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from tqdm.auto import tqdm
 
-from ..atomic import atomic_path
 from ..cache import CacheWarning, cache_folder, unusable, write_entry
-
-SCHEDULER_ENV = "MUTUAL_DASK_SCHEDULER"
-INLINE = "inline"
-
-
-def scheduler_address(scheduler=None):
-    """The scheduler to use: ``scheduler`` if given, else ``$MUTUAL_DASK_SCHEDULER``, else None
-    (an embedded LocalCluster)."""
-    if scheduler is not None and not isinstance(scheduler, str):
-        raise ValueError(f"scheduler must be an address string or {INLINE!r}, got {scheduler!r}")
-    return scheduler or os.environ.get(SCHEDULER_ENV) or None
-
-
-@contextmanager
-def dask_client(scheduler=None, workers=None, timeout=30):
-    """A ``distributed.Client``: to ``scheduler`` (or ``$MUTUAL_DASK_SCHEDULER``) if given, else to an
-    embedded ``LocalCluster`` of ``workers`` single-threaded processes (default: one per core),
-    closed on exit."""
-    from dask.distributed import Client, LocalCluster
-
-    address = scheduler_address(scheduler)
-    if address == INLINE:
-        raise ValueError(f"scheduler={INLINE!r} runs without Dask: no client")
-    if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
-        raise ValueError(f"workers must be a positive integer, got {workers!r}")
-    if address:
-        client = Client(address, timeout=timeout)
-        try:
-            yield client
-        finally:
-            client.close()
-        return
-    cluster = LocalCluster(n_workers=int(workers or os.cpu_count() or 1), threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
-    client = Client(cluster, timeout=timeout)
-    try:
-        yield client
-    finally:
-        client.close()
-        cluster.close()
-
+from ..parallel import INLINE, SCHEDULER_ENV, dask_client, map_tasks, scheduler_address  # noqa: F401 (the sweep's words)
 
 CACHE_FORMAT = 1
 _COLUMN_TYPES = {"float64": (float, int), "int64": (int,), "bool": (bool,), "object": (str, type(None)),
@@ -215,12 +172,6 @@ class SweepStats:
     task_seconds: list = field(default_factory=list, repr=False)
 
 
-def _timed(fn, task, *shared):
-    start = time.perf_counter()
-    result = fn(task, *shared)
-    return result, time.perf_counter() - start
-
-
 def run_tasks(fn, tasks, params=None, shared=(), cache=None, scheduler=None, workers=None, client=None,
               progress=True, desc="tasks"):
     """``[fn(task, *shared) for task in tasks]`` on Dask (module docstring), in task order.
@@ -236,56 +187,39 @@ def run_tasks(fn, tasks, params=None, shared=(), cache=None, scheduler=None, wor
     todo = [i for i, r in enumerate(results) if r is None]
     stats = SweepStats(tasks=len(tasks), cached=len(tasks) - len(todo), computed=len(todo))
     bar = tqdm(total=len(tasks), initial=stats.cached, desc=desc, disable=not progress or None)
+    version = cache.version if cache is not None else "uncached"
 
-    def done(i, result, seconds):
-        results[i] = result
+    def done(j, timed):
+        i = todo[j]
+        results[i], seconds = timed
         stats.task_seconds.append(seconds)
         if cache is not None:
-            cache.put(params(tasks[i]), result)
+            cache.put(params(tasks[i]), results[i])
         bar.update(1)
 
+    def key(task):
+        return hashlib.sha256(json.dumps([params(task), version], sort_keys=True, default=str).encode()).hexdigest()[:24]
+
     try:
-        if todo and scheduler_address(scheduler) == INLINE and client is None:
-            stats.where, stats.workers = INLINE, 1
-            for i in todo:
-                done(i, *_timed(fn, tasks[i], *shared))
-        elif todo:
-            with (_given(client) if client is not None else dask_client(scheduler, workers)) as c:
-                _run_on(c, fn, tasks, todo, shared, params, cache, done, stats)
+        if todo:
+            _, ran = map_tasks(_Timed(fn), [tasks[i] for i in todo], shared, scheduler, workers, client, done, key)
+            stats.where, stats.workers = ran.where, ran.workers
     finally:
         bar.close()
     stats.seconds = time.perf_counter() - start
     return results, stats
 
 
-@contextmanager
-def _given(client):
-    yield client
+class _Timed:
+    """``fn`` returning ``(result, seconds)``; named as ``fn`` for the task keys."""
 
+    def __init__(self, fn):
+        self.fn, self.__name__ = fn, getattr(fn, "__name__", "task")
 
-def _run_on(client, fn, tasks, todo, shared, params, cache, done, stats):
-    from dask.distributed import as_completed
-
-    stats.where = str(client.scheduler.address)
-    held = client.scatter(list(shared), broadcast=True, hash=False) if shared else []
-    version = cache.version if cache is not None else "uncached"
-    futures = {}
-    for i in todo:
-        key = hashlib.sha256(json.dumps([params(tasks[i]), version], sort_keys=True, default=str).encode()).hexdigest()
-        futures[client.submit(_timed, fn, tasks[i], *held, key=f"{getattr(fn, '__name__', 'task')}-{key[:24]}",
-                              pure=False)] = i
-    for future in as_completed(futures):
-        result, seconds = future.result()
-        done(futures[future], result, seconds)
-        future.release()
-    info = client.scheduler_info(n_workers=-1) if _takes_n_workers(client) else client.scheduler_info()
-    stats.workers = len(info["workers"])  # after the run: workers of a remote cluster may join late
-
-
-def _takes_n_workers(client):
-    import inspect
-
-    return "n_workers" in inspect.signature(client.scheduler_info).parameters
+    def __call__(self, task, *shared):
+        start = time.perf_counter()
+        result = self.fn(task, *shared)
+        return result, time.perf_counter() - start
 
 
 def noop(task):
