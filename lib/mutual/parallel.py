@@ -11,8 +11,8 @@ order, so they never depend on the number of workers or the order they finish in
   for this run (``distributed.security.Security.temporary()``, held in memory): a client or worker without
   it cannot connect, so no other local user can run code in its workers. Its HTTP servers listen on
   random loopback ports and serve no route: no dashboard, no status page, nothing on port 8787. Without
-  the ``cryptography`` package (which makes the certificate) the scheduler and the workers run inside
-  this process as threads and talk in memory (``inproc://``), reachable by no other process;
+  the ``cryptography`` package, which makes the certificate, no cluster is started: the tasks run in this
+  process (one warning says so);
 * an address (``"tls://host:8786"``, ``"tcp://..."``): a user's own running cluster, with the security
   settings of their Dask configuration (``distributed.comm.tls.*``), as ``dask`` itself reads them;
 * ``"inline"``: in this process, without Dask (a reference, and for debugging).
@@ -24,6 +24,7 @@ import hashlib
 import json
 import logging
 import os
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -54,14 +55,13 @@ def _check_workers(workers):
     return int(workers or os.cpu_count() or 1)
 
 
-def _temporary_security():
-    """A throwaway TLS certificate for every role of the embedded cluster, or None without ``cryptography``."""
+def can_be_private():
+    """Whether an embedded cluster can be made private: ``cryptography`` makes its throwaway certificate."""
     try:
-        import cryptography  # noqa: F401  (Security.temporary makes its certificate with it)
+        import cryptography  # noqa: F401
     except ImportError:
-        return None
-    from distributed.security import Security
-    return Security.temporary()
+        return False
+    return True
 
 
 @contextmanager
@@ -71,14 +71,18 @@ def private_cluster(workers=None, timeout=30):
     import dask
     from dask.distributed import Client, LocalCluster
 
+    from distributed.security import Security
+
     n = _check_workers(workers)
-    security = _temporary_security()
-    where = dict(host="127.0.0.1", protocol="tls://", security=security, processes=True) if security is not None \
-        else dict(processes=False)                  # in-process: inproc:// comms, no listening socket
+    if not can_be_private():
+        raise RuntimeError("an embedded Dask cluster needs the 'cryptography' package for its private TLS certificate; "
+                           "install it, or run inline or on a scheduler of your own")
+    security = Security.temporary()                 # every role, in memory only; passed to the workers by pipe
     with dask.config.set(NO_ROUTES):                # read by the scheduler and copied into each worker's config
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, dashboard_address=None,
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               protocol="tls://", security=security, dashboard_address=None,
                                scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
-                               worker_dashboard_address=None, silence_logs=logging.ERROR, **where)
+                               worker_dashboard_address=None, silence_logs=logging.ERROR)
     try:
         with Client(cluster, security=security, timeout=timeout) as client:
             yield client
@@ -117,6 +121,11 @@ def map_tasks(fn, tasks, shared=(), scheduler=None, workers=None, client=None, o
     tasks = list(tasks)
     results = [None] * len(tasks)
     notify = on_result or (lambda i, result: None)
+    if client is None and scheduler_address(scheduler) is None and not can_be_private():
+        warnings.warn("the 'cryptography' package is missing, so no private Dask cluster can be started: running the "
+                      "tasks in this process (install cryptography, or give a scheduler of your own)", RuntimeWarning,
+                      stacklevel=2)
+        scheduler = INLINE
     if client is None and scheduler_address(scheduler) == INLINE:
         for i, task in enumerate(tasks):
             results[i] = fn(task, *shared)
