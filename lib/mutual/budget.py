@@ -191,7 +191,7 @@ def anova(levels, subjects):
     """:func:`mutual.study.rm_anova` and every pair of levels (Tukey and Holm), ``levels`` x ``subjects`` cells."""
     pairs = levels * (levels - 1) / 2
     return Estimate(f"the repeated-measures ANOVA of {int(levels):,} levels x {int(subjects):,} subjects "
-                    f"({int(pairs):,} pairs of levels)", 8.0 * levels * subjects * 4 + 400.0 * pairs,
+                    f"({int(pairs):,} pairs of levels)", 8.0 * levels * subjects * 4 + 600.0 * pairs,
                     ANOVA_PAIR_SECONDS * pairs, "analyse fewer levels (--levels, or select rows with --where)")
 
 
@@ -225,8 +225,9 @@ def continuous_inference(cells, controls, samples, horizon, scheme="sample", sub
     X = _product(cells)
     regions = candidate_regions(cells, families, every, radii, half_widths)
     seconds = CONTINUOUS_BACKUP_SECONDS * horizon * X * controls * regions
-    return Estimate(f"constraint inference on {_x(cells)} cells x {int(controls)} controls over {int(horizon):,} steps "
-                    f"({int(regions):,} candidate regions)", max(disc.bytes, X * controls * CONTINUOUS_PAIR_BYTES),
+    points = f" x {int(samples):,} samples" if scheme == "sample" else ""
+    return Estimate(f"constraint inference on {_x(cells)} cells x {int(controls)} controls{points} over "
+                    f"{int(horizon):,} steps ({int(regions):,} candidate regions)", max(disc.bytes, X * controls * CONTINUOUS_PAIR_BYTES),
                     disc.seconds + seconds, "use fewer cells (--cells or [state] cells), a shorter horizon ([time] "
                     "horizon), fewer samples ([discretization] samples) or fewer candidate families")
 
@@ -263,7 +264,7 @@ def gridworld_inference(states, actions, horizon, rounds, demonstrations=0):
 
 def demonstrations(n, steps):
     """``n`` demonstrations of ``steps`` steps in a gridworld (state and action per step)."""
-    return Estimate(f"{int(n):,} demonstrations of {int(steps):,} steps", 16.0 * n * (steps + 1) * 3,
+    return Estimate(f"{int(n):,} demonstrations of {int(steps):,} steps", 100.0 * n * (steps + 1),
                     2e-6 * n * steps, "ask for fewer demonstrations (--n)")
 
 
