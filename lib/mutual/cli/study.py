@@ -8,6 +8,7 @@ term (:func:`mutual.study.tukey_rm`) and paired t-tests with Holm's correction
 level names the ``--within`` column holds.
 """
 
+import hashlib
 import importlib
 import math
 import re
@@ -36,7 +37,8 @@ machine): 2.5-3.3 s of CPU, most of it importing scipy.stats, pandas and matplot
 writes to --out:  anova_<name>.csv (the test), pairwise_<name>.csv (Tukey and Holm),
                   cells_<name>.csv (the subject x level table analysed),
                   means_<name>.png (level means with SE bars and Tukey brackets; no brackets above
-                  6 levels, no figure above 30: the tables hold them)
+                  6 levels, no figure above 30: the tables hold them); <name>: --dv and the --where
+                  values, with a hash of them where they hold characters other than A-Z a-z 0-9 _ . -
 """
 
 EXAMPLE = """\
@@ -118,8 +120,12 @@ def _shown(name, width=40):
 
 
 def _stem(args):
-    parts = [args.dv] + [v for _, v in _filters(args.where)]
-    return re.sub(r"[^A-Za-z0-9_.-]+", "-", "_".join(parts)).strip("-")[:80] or "dv"
+    """The outputs' name: the --dv and --where values as written, or, where they hold other characters or run
+    long, their cleaned form plus a hash of the text, so that two requests (--dv 'a b', --dv 'a-b') never share
+    file names."""
+    text = "_".join([args.dv] + [v for _, v in _filters(args.where)])
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "-", text).strip("-")[:80] or "dv"
+    return stem if stem == text else f"{stem}-{hashlib.sha256(text.encode()).hexdigest()[:8]}"
 
 
 def analyse(data, dv, within, subject, aggregate=None, levels=None):
