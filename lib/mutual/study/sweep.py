@@ -19,6 +19,7 @@ whatever the number of workers or the order they finish in. Progress is shown wi
 """
 
 import hashlib
+import hmac
 import json
 import time
 import warnings
@@ -27,10 +28,10 @@ from pathlib import Path
 
 from tqdm.auto import tqdm
 
-from ..cache import CacheWarning, cache_folder, unusable, write_entry
+from ..cache import CacheWarning, cache_folder, secret_key, sign, unusable, usable_folder, write_entry
 from ..parallel import INLINE, SCHEDULER_ENV, dask_client, map_tasks, scheduler_address  # noqa: F401 (the sweep's words)
 
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2
 _COLUMN_TYPES = {"float64": (float, int), "int64": (int,), "bool": (bool,), "object": (str, type(None)),
                  "str": (str, type(None))}
 
@@ -41,8 +42,9 @@ class TaskCache:
 
     A result is a pandas DataFrame whose columns hold floats, whole numbers, booleans or text (None
     allowed); numbers are written exactly (JSON's shortest round-trip form). JSON cannot run code when
-    it is read, and :meth:`get` checks what it reads: the format, the task's key, the column names and
-    every value's type. A file that does not verify is deleted with a :class:`mutual.cache.CacheWarning`
+    it is read, and :meth:`get` checks what it reads: its HMAC under the user's secret key (no one without
+    the key can forge an entry; :mod:`mutual.cache`), the format, the task's key, the column names and
+    every value's type; a folder that others may write is not used at all. A file that does not verify is deleted with a :class:`mutual.cache.CacheWarning`
     and the task recomputed; a folder found where a file should be is removed when the result is written
     (the cache heals). A cache folder that cannot be created or written turns the cache off for the
     rest of the sweep with one warning (:mod:`mutual.cache`); the sweep goes on.
@@ -54,6 +56,14 @@ class TaskCache:
         self.version = version
         self.folder = Path(folder) if folder is not None else cache_folder("power")
         self.disabled = self.folder is None
+        self._secret = None
+
+    def _usable(self):
+        """Whether the cache may be used: its folder is this user's alone and the user's key is there (checked once)."""
+        if not self.disabled and self._secret is None:
+            self._secret = usable_folder(self.folder) and secret_key()
+            self.disabled = not self._secret
+        return not self.disabled
 
     def __repr__(self):
         return f"TaskCache({str(self.folder)!r}, version={self.version!r})"
@@ -67,7 +77,7 @@ class TaskCache:
 
     def get(self, params):
         """The cached result, or None: absent, a folder in its place, or not verifying (then deleted)."""
-        if self.disabled:
+        if not self._usable():
             return None
         path, key = self.path(params), self.key(params)
         try:
@@ -81,17 +91,27 @@ class TaskCache:
         except (OSError, UnicodeDecodeError) as err:
             return self._heal(path, f"unreadable ({type(err).__name__})")
         try:
-            return _frame_from(json.loads(text), key)
+            return _frame_from(self._authentic(json.loads(text)), key)
         except (ValueError, TypeError, KeyError, AttributeError) as err:
             return self._heal(path, str(err))
 
     def put(self, params, result):
         """Store ``result`` (a DataFrame, see the class docstring); a disk that refuses turns the cache off."""
-        if self.disabled:
+        if not self._usable():
             return
-        text = json.dumps(_frame_to(result, self.key(params), self.version, params), allow_nan=True)
+        body = _frame_to(result, self.key(params), self.version, params)
+        text = json.dumps({**body, "mac": sign(self._secret, json.dumps(body, sort_keys=True))}, allow_nan=True)
         if write_entry(self.path(params), lambda tmp: tmp.write_text(text, encoding="utf-8")) is None:
             self.disabled = True
+
+    def _authentic(self, stored):
+        """``stored`` without its "mac", when the mac is the HMAC of the rest under the user's key (else ValueError)."""
+        body = dict(stored) if isinstance(stored, dict) else {}
+        mac = body.pop("mac", None)
+        if not isinstance(mac, str) or not hmac.compare_digest(mac, sign(self._secret, json.dumps(body, sort_keys=True))):
+            raise ValueError("its authentication code does not match (changed after it was written, or written "
+                             "without your key)")
+        return body
 
     def _heal(self, path, reason):
         warnings.warn(f"power cache file {path} does not verify: {reason}; recomputing it", CacheWarning,
@@ -173,17 +193,21 @@ class SweepStats:
 
 
 def run_tasks(fn, tasks, params=None, shared=(), cache=None, scheduler=None, workers=None, client=None,
-              progress=True, desc="tasks"):
+              progress=True, desc="tasks", verify=True):
     """``[fn(task, *shared) for task in tasks]`` on Dask (module docstring), in task order.
 
     ``params(task)`` gives the task's parameters as JSON-able data (default ``task.params()``), the
     cache key with ``cache.version``. ``client``: an open ``distributed.Client`` (else one is made
-    from ``scheduler`` / ``workers`` for this call). Returns ``(results, SweepStats)``.
+    from ``scheduler`` / ``workers`` for this call). ``verify``: recompute one cached result in this
+    process and compare it with the cache's (a task is cheap beside a sweep); when they differ, nothing
+    in the cache is used for this sweep. Returns ``(results, SweepStats)``.
     """
     tasks = list(tasks)
     params = params or (lambda t: t.params())
     start = time.perf_counter()
     results = [cache.get(params(t)) if cache is not None else None for t in tasks]
+    if verify and not _reproduces(fn, tasks, shared, results, params, cache):
+        results = [None] * len(tasks)
     todo = [i for i, r in enumerate(results) if r is None]
     stats = SweepStats(tasks=len(tasks), cached=len(tasks) - len(todo), computed=len(todo))
     bar = tqdm(total=len(tasks), initial=stats.cached, desc=desc, disable=not progress or None)
@@ -208,6 +232,20 @@ def run_tasks(fn, tasks, params=None, shared=(), cache=None, scheduler=None, wor
         bar.close()
     stats.seconds = time.perf_counter() - start
     return results, stats
+
+
+def _reproduces(fn, tasks, shared, results, params, cache):
+    """Whether the first cached result equals its recomputation (True when nothing came from the cache)."""
+    cached = [i for i, r in enumerate(results) if r is not None]
+    if not cached:
+        return True
+    i = cached[0]
+    again = fn(tasks[i], *shared)
+    same = again.equals(results[i]) if hasattr(again, "equals") else again == results[i]
+    if not same:
+        warnings.warn(f"power cache in {cache.folder}: the cached result of {params(tasks[i])} differs from its "
+                      "recomputation; nothing in the cache is used for this sweep", CacheWarning, stacklevel=3)
+    return bool(same)
 
 
 class _Timed:
