@@ -30,7 +30,7 @@ MIX_NAMES = ("thesis", "mostly-standard", "mostly-gradual")
 #: what one request may ask for: sample sizes listed, the largest N (analytic, simulated), cohorts
 MAX_SIZES, MAX_N_ANALYTIC, MAX_N_SIMULATED, MAX_COHORTS = 10_000, 100_000, 1_000, 100_000
 #: measured (README, "Planning a replication"): one simulated participant on the full grid with 60-s trials
-SECONDS_PER_PARTICIPANT = 0.32
+SECONDS_PER_PARTICIPANT = budget.PARTICIPANT_SECONDS
 
 DESCRIPTION = """\
 Power and sample size of a one-way repeated-measures study, analytic (G*Power's "ANOVA: repeated

@@ -20,7 +20,12 @@ from pathlib import Path
 
 from ..atomic import write_text
 from ..folder_lock import FolderBusy, hold
+from .paths import BUILD
 from .runs import shown
+
+#: where a full run (the only one that may write figures/ and data/) says it runs, with its count of runs beside
+#: it: a change to the committed files during another run is that run's own only when no full run wrote meanwhile
+COMMITTED_RUN = BUILD / "executed" / "running.json"
 
 
 class OutputBusy(FolderBusy):

@@ -35,9 +35,9 @@ import nbformat
 
 from ..atomic import write_text
 from . import paths as _paths
-from .lock import OutputBusy, check_output_folder, disk_error, output_lock, writers
+from .lock import COMMITTED_RUN, OutputBusy, check_output_folder, disk_error, output_lock, writers
 from .numerics import portable_env
-from .paths import BUILD, OUTPUT_ENV, executed_dir, figures_dir, generated_data_dir, is_committed, results_dir
+from .paths import OUTPUT_ENV, executed_dir, figures_dir, generated_data_dir, is_committed, results_dir
 from .runs import kernel_env, run_mode, shown
 
 KERNEL = "mutual"
@@ -104,15 +104,9 @@ def _cell_label(nb, index):
     return f"code cell {number} ({first[:60]!r})"
 
 
-#: where a full run (the only one that may write figures/ and data/) says it runs; its count of runs beside it
-COMMITTED_RUN = BUILD / "executed" / "running.json"
-
-
 def committed_files():
     """``{path: (mtime, size)}`` of the committed outputs (``figures/`` and ``data/``), to tell whether a
-    run that must not write them did. A change is the run's own only when no full run held figures/ at its
-    start or end and none started in between (:func:`mutual.compendium.lock.writers`): a ``make figures``
-    in the same checkout writes them at the same time, and its writes are its own."""
+    run that must not write them did (unless a full run wrote meanwhile: :func:`.lock.writers`)."""
     found = {}
     for folder in (_paths.FIGURES, _paths.DATA):
         for path in (folder.rglob("*") if folder.is_dir() else []):
