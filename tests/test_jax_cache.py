@@ -34,7 +34,7 @@ def _env(**extra):
 def test_a_second_process_loads_what_the_first_compiled(tmp_path):
     env = _env(MUTUAL_CACHE_DIR=str(tmp_path))
     first, cold_hits, folder = _run(env)
-    assert folder == str(tmp_path / "jax") and any((tmp_path / "jax").iterdir())
+    assert folder == str(tmp_path / jax_cache.FOLDER) and any((tmp_path / jax_cache.FOLDER).iterdir())
     second, warm_hits, _ = _run(env)
     assert cold_hits == 0 and warm_hits >= 1 and second == first
 
@@ -79,7 +79,7 @@ def _programs(env):
 
 
 def _lambdas(folder):
-    return sorted(p for p in (folder / "jax").iterdir() if p.name.startswith("jit__lambda"))
+    return sorted(p for p in (folder / jax_cache.FOLDER).iterdir() if p.name.startswith("jit__lambda"))
 
 
 def _swap(a, b):
@@ -105,7 +105,7 @@ def test_a_replaced_compiled_program_is_never_run(tmp_path, how):
 
 def test_a_cache_folder_others_may_write_is_not_used(tmp_path, monkeypatch):
     shared = tmp_path / "shared"
-    (shared / "jax").mkdir(parents=True)
+    (shared / jax_cache.FOLDER).mkdir(parents=True)
     shared.chmod(0o777)
     monkeypatch.setenv("MUTUAL_CACHE_DIR", str(shared))
     env = {}

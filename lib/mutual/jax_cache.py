@@ -3,7 +3,7 @@
 JAX compiles every jitted function once per process; the compendium's solvers (iLQR, L-BFGS, the
 Riccati recursions, the Algorithm 4 stencil, the HJ solver) take 0.2-5 s each to compile, and the
 tests, the notebooks, ``make figures`` and the command line compile the same programs again and
-again. Importing :mod:`mutual` points JAX's persistent cache at ``<cache folder>/jax``
+again. Importing :mod:`mutual` points JAX's persistent cache at ``<cache folder>/jax-signed``
 (:func:`mutual.cache.cache_dir`: ``$MUTUAL_CACHE_DIR``, or ``~/.cache/mutual``), so a program
 compiled once is loaded from disk by every later process. Entries are keyed by JAX's own rules
 (the program, the JAX and XLA versions, the backend and its flags), so a change of any of them
@@ -18,7 +18,7 @@ JAX runs what it loads from its cache as machine code, and its own cache has no 
 documentation: sharing the cache is letting anyone who may write it run code as you). So, as for every
 cache of :mod:`mutual.cache`: a cache folder that others may write, or that is not yours, is not used
 (:func:`mutual.cache.insecure`; your own ``JAX_COMPILATION_CACHE_DIR`` too), and each entry in
-``<cache folder>/jax`` carries an HMAC-SHA256 of its key and content under your secret key
+``<cache folder>/jax-signed`` carries an HMAC-SHA256 of its key and content under your secret key
 (:func:`authenticate_entries`): an executable replaced, swapped with another entry or planted without
 the key does not verify, is deleted, and is compiled anew (a warning says so), instead of running as is or
 failing with an XLA layout error. This wraps JAX's file cache through its internal
@@ -35,8 +35,10 @@ import sys
 import warnings
 from pathlib import Path
 
+from .atomic import atomic_path
 from .cache import CacheWarning, advice, cache_dir, insecure, secret_key, unusable
 
+FOLDER = "jax-signed"       # entries with their HMAC (the unsigned ones of "jax" are never read)
 MIN_COMPILE_SECONDS = 0.0  # every compiled program (JAX's default, 1 s, would leave out most iLQR kernels)
 SETTINGS = {"jax_compilation_cache_dir": "JAX_COMPILATION_CACHE_DIR",
             "jax_persistent_cache_min_compile_time_secs": "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"}
@@ -52,7 +54,7 @@ def _writable(folder):
 
 
 def use_persistent_cache(environ=os.environ):
-    """Turn JAX's persistent compilation cache on in ``<cache folder>/jax``, with authenticated entries (see
+    """Turn JAX's persistent compilation cache on in ``<cache folder>/jax-signed``, with authenticated entries (see
     the module); refuse a folder, ours or yours, that others may write."""
     own = environ.get("JAX_COMPILATION_CACHE_DIR")
     if own:
@@ -66,7 +68,7 @@ def use_persistent_cache(environ=os.environ):
                 jax.config.update("jax_compilation_cache_dir", None)
         return
     try:
-        folder = cache_dir() / "jax"
+        folder = cache_dir() / FOLDER
     except OSError as err:
         unusable("the cache folder", err, "JAX's compilation cache is off")
         return
@@ -150,6 +152,12 @@ def _wrap(module, folder):
         module._cache = _authenticated(module._cache)
 
 
+def write_text_bytes(path, data):
+    """Atomically write ``data`` to ``path`` (:func:`mutual.atomic.atomic_path`)."""
+    with atomic_path(path, suffix="") as tmp:
+        tmp.write_bytes(data)
+
+
 def _mac(secret, key, value):
     return hmac.new(secret, b"jax\0" + key.encode() + b"\0" + bytes(value), hashlib.sha256).digest()
 
@@ -183,7 +191,16 @@ def _authenticated(base):
 
         def put(self, key, value):
             secret = secret_key()
-            if secret is not None:
-                self._inner.put(key, _mac(secret, key, value) + bytes(value))
+            if secret is None:
+                return
+            stored = _mac(secret, key, value) + bytes(value)
+            entry = Path(str(self._path)) / f"{key}-cache"
+            if getattr(self._inner, "eviction_enabled", False) or entry.exists():
+                self._inner.put(key, stored)        # JAX's own bookkeeping (a size limit), or keep the entry
+                return
+            try:
+                write_text_bytes(entry, stored)     # whole or not at all: another process never reads half
+            except OSError:
+                pass
 
     return AuthenticatedEntries(base)
