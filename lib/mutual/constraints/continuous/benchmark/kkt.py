@@ -16,6 +16,11 @@ the costates backwards, nu_L = grad w + lambda_L grad g(x_L), nu_t = grad_x l dt
     r_t = grad_u l dt + B_t' nu_{t+1} + mu_t,        A_t, B_t = dF/dx, dF/du at the recorded (x_t, u_t),
 
 which is LINEAR in the cost weights gamma and the multipliers (:func:`kkt_model` eliminates nu).
+On an unstable system (the cart-pole) the backward recursion grows like the falling pole, e^(4.6 t),
+and over 5 s swamps every number, so each demonstration is cut into windows, wherever the recursion
+has grown by ``GROWTH`` (:func:`window_ends`; the pendulum, the double integrator and the car are
+never cut), whose final costates are left free (the KKT conditions of a locally optimal trajectory
+hold on each piece with an unknown terminal costate): r = G gamma + C lambda + mu + F nu_free.
 The cost is "uncertain" as in the RA-L paper: gamma weighs the terms of the user's system-file
 cost (gamma = 1 is the file's own), each within a factor 2 of it (a box of cost parameters; a
 free gamma >= 0 lets a cost that the data leave flat, such as a final velocity they all end at,
@@ -45,6 +50,8 @@ import numpy as np
 from ..recordings import align
 from ..systems import integrate
 
+#: the costate recursion is cut where it has grown by this factor (module docstring)
+GROWTH = 1e3
 #: complementary slackness: a multiplier may act at states within this share of the box's width of the boundary
 EPSILON = 0.01
 #: controls within this share of the control range of a limit may carry its multiplier
@@ -53,16 +60,22 @@ SATURATED = 0.01
 
 @dataclass(eq=False)
 class KKTModel:
-    """The residual r = G gamma + C lambda + saturated * mu of a set of demonstrations (:func:`kkt_model`):
-    ``states`` (N, L+1, n) wrapped, ``controls`` (N, L, m), ``influence`` (N, L+1, n, L, m): the
-    residual of demonstration d at steps t < s from a unit source e_j in the costate at step s,
-    ``G`` (rows, K) the cost terms' columns, ``saturated`` (rows,) +1 / -1 where a control is at
-    its upper / lower limit (a multiplier mu >= 0 there), the ``terms`` named, and the ``problem``."""
+    """The residual r = G gamma + C lambda + saturated * mu + free nu of a set of demonstrations
+    (:func:`kkt_model`): ``states`` (N, L+1, n) wrapped, ``controls`` (N, L, m), ``influence``
+    (N, L+1, n, L, m): the residual of demonstration d at the steps of its window before s from a
+    unit source e_j in the costate at step s, ``cuts`` (N, L+1) the window ends (their costates are
+    free; a multiplier there explains nothing), ``G`` (rows, K) the cost terms' columns, ``free``
+    (rows, F) the free costates' columns, ``window`` (rows,) each row's window (demonstration and
+    piece), ``saturated`` (rows,) +1 / -1 where a control is at its upper / lower limit (a
+    multiplier mu >= 0 there), the ``terms`` named, and the ``problem``."""
 
     states: np.ndarray
     controls: np.ndarray
     influence: np.ndarray
+    cuts: np.ndarray
     G: np.ndarray
+    free: np.ndarray
+    window: np.ndarray
     saturated: np.ndarray
     terms: list
     problem: object
@@ -73,10 +86,11 @@ class KKTModel:
 
     def column(self, d, s, gradient):
         """The residual column of a multiplier at state s of demonstration d whose constraint has
-        ``gradient`` (n,) there: zero outside demonstration d."""
+        ``gradient`` (n,) there: zero outside demonstration d (and zero at a window end)."""
         N, _, _, L, m = self.influence.shape
         col = np.zeros((N, L, m))
-        col[d] = np.einsum("j,jtm->tm", gradient, self.influence[d, s])
+        if not self.cuts[d, s]:
+            col[d] = np.einsum("j,jtm->tm", gradient, self.influence[d, s])
         return col.ravel()
 
 
@@ -120,13 +134,34 @@ def jacobians(problem, states, controls):
     return J[..., :n], J[..., n:]
 
 
-def influence(A, B):
-    """(N, L+1, n, L, m): the residual B_t' psi_{t+1} at steps t < s of a unit costate source e_j at
-    step s, with psi_s = e_j, psi_t = A_t' psi_{t+1} (module docstring), for every s and j at once."""
+def window_ends(A, growth=GROWTH):
+    """(N, L+1) booleans: where each demonstration's costate recursion is cut -- going back from the
+    end, a cut wherever the product A_t' ... A_{c-1}' since the last cut has grown past ``growth``
+    in norm (never at the last state, never leaving a window shorter than 2 steps)."""
+    N, L, n, _ = A.shape
+    cuts = np.zeros((N, L + 1), dtype=bool)
+    M = np.broadcast_to(np.eye(n), (N, n, n)).copy()
+    length = np.zeros(N, dtype=int)
+    for t in range(L - 1, -1, -1):
+        M = np.einsum("dvw,dvu->dwu", A[:, t], M)                  # A_t' M
+        length += 1
+        cut = (np.linalg.norm(M, axis=(1, 2)) > growth) & (length > 2) & (t > 0)
+        cuts[cut, t] = True
+        M[cut] = np.eye(n)
+        length[cut] = 0
+    return cuts
+
+
+def influence(A, B, cuts):
+    """(N, L+1, n, L, m): the residual B_t' psi_{t+1} at the steps t < s of s's window of a unit
+    costate source e_j at step s, psi_s = e_j, psi_t = A_t' psi_{t+1} (module docstring), for every
+    s and j at once; at a window end c (``cuts`` (N, L+1)) the entry is the influence of the free
+    costate nu_c, which absorbs every later source."""
     N, L, n, m = B.shape
     P = np.zeros((N, L + 1, n, n))
     out = np.zeros((N, L + 1, n, L, m))
     for t in range(L - 1, -1, -1):
+        P[cuts[:, t + 1]] = 0.0
         P[:, t + 1] = np.eye(n)
         out[:, :, :, t, :] = np.einsum("dsjv,dvm->dsjm", P, B[:, t])
         P = np.einsum("dsjv,dvw->dsjw", P, A[:, t])
@@ -163,13 +198,27 @@ def _saturation(problem, controls):
     return (np.where(controls >= hi - band, 1.0, 0.0) - np.where(controls <= lo + band, 1.0, 0.0)).ravel()
 
 
-def kkt_model(problem, recording):
-    """The :class:`KKTModel` of ``recording`` on the system file's ``problem`` (aligned to its dt)."""
+def kkt_model(problem, recording, growth=GROWTH):
+    """The :class:`KKTModel` of ``recording`` on the system file's ``problem`` (aligned to its dt),
+    its costate recursions cut where they grow past ``growth`` (:func:`window_ends`)."""
     states, controls, _ = align(recording, problem.dt)
     states = problem.grid.wrap(states.reshape(-1, states.shape[2])).reshape(states.shape)
     controls = step_controls(problem, states, controls)
     A, B = jacobians(problem, states, controls)
-    R = influence(A, B)
+    cuts = window_ends(A, growth)
+    R = influence(A, B, cuts)
     terms = _cost_terms(problem, states, controls)
-    G = np.stack([(du + np.einsum("dsj,dsjtm->dtm", src, R)).ravel() for _, src, du in terms], axis=1)
-    return KKTModel(states, controls, R, G, _saturation(problem, controls), [name for name, _, _ in terms], problem)
+    G = np.stack([(du + np.einsum("dsj,dsjtm->dtm", src * ~cuts[..., None], R)).ravel() for _, src, du in terms],
+                 axis=1)
+    N, L, m = controls.shape
+    free = []
+    for d, c in zip(*np.nonzero(cuts)):
+        for j in range(states.shape[2]):
+            col = np.zeros((N, L, m))
+            col[d] = R[d, c, j]
+            free.append(col.ravel())
+    free = np.stack(free, axis=1) if free else np.zeros((N * L * m, 0))
+    piece = np.cumsum(np.c_[np.zeros((N, 1), dtype=bool), cuts[:, 1:L]], axis=1)       # window of step t
+    rows_window = np.repeat((np.arange(N)[:, None] * (L + 1) + piece).ravel(), m)
+    return KKTModel(states, controls, R, cuts, G, free, rows_window, _saturation(problem, controls),
+                    [name for name, _, _ in terms], problem)

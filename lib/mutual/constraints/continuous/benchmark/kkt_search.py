@@ -4,9 +4,10 @@ Each round (at most ``ROUNDS``):
 
 1. candidates from the system file's families -- a bound on each side of each coordinate that does
    not wrap, at the recorded extreme; disks and boxes (aspect ratios ``ASPECTS``) centred on a grid
-   of the plane (one cell apart), each the largest holding no recorded state, kept when at least
+   of the plane (two cells apart), each the largest holding no recorded state, kept when at least
    one cell wide (a disk) or half a cell (a box's half-widths); the best disk and box are refined
-   on a grid a quarter cell apart around them;
+   on a grid a quarter cell apart (aspect ratios ``FINE_ASPECTS``) around them, and the best of those
+   polished by Nelder-Mead over its centre (and a box's aspect ratio);
 2. each candidate's multipliers may act only at states within EPSILON of its boundary
    (complementary slackness); its residual is fitted by nonnegative least squares (NNLS) over the
    cost weights and those multipliers, the rows of saturated controls left out (their multipliers
@@ -33,6 +34,7 @@ ASPECTS = (0.5, 1.0, 2.0)
 FINE_ASPECTS = (1 / 3, 0.5, 1.0, 2.0, 3.0)
 MAX_ACTIVE = 200         # multipliers per candidate: the states nearest its boundary
 COST_RANGE = 2.0         # the cost's uncertainty: each term's weight within a factor 2 of the file's
+SHORTLIST = 8           # candidates refitted with the cost weights free after the quick ranking
 PRECISION = 1e-10        # residual sums of squares below this share of the cost columns' are solver noise
 
 
@@ -62,10 +64,10 @@ def _columns(model, points, gradients):
         if len(points) else np.zeros((model.rows, 0))
 
 
-def _nearest(distance, limit):
-    """Indices (d, s) with s >= 1 of the states whose ``distance`` (N, L+1) to a boundary is within
-    ``limit``, at most MAX_ACTIVE of them, nearest first."""
-    d = np.where(np.arange(distance.shape[1])[None] >= 1, distance, np.inf)
+def _nearest(distance, limit, cuts):
+    """Indices (d, s) with s >= 1 and s not a window end (``cuts`` (N, L+1)) of the states whose ``distance``
+    (N, L+1) to a boundary is within ``limit``, at most MAX_ACTIVE of them, nearest first."""
+    d = np.where((np.arange(distance.shape[1]) >= 1)[None] & ~cuts, distance, np.inf)
     flat = np.flatnonzero(d.ravel() <= limit)
     flat = flat[np.argsort(d.ravel()[flat], kind="stable")][:MAX_ACTIVE]
     return [tuple(int(v) for v in np.unravel_index(k, d.shape)) for k in flat]
@@ -78,7 +80,7 @@ def bound_candidates(model):
         width = grid.high[dim] - grid.low[dim]
         for side, sign in (("upper", 1.0), ("lower", -1.0)):
             value = x[..., dim].max() if side == "upper" else x[..., dim].min()
-            points = _nearest(np.abs(x[..., dim] - value), EPSILON * width)
+            points = _nearest(np.abs(x[..., dim] - value), EPSILON * width, model.cuts)
             gradient = np.zeros((len(points), grid.ndim))
             gradient[:, dim] = sign
             out.append(Candidate(Bound(int(dim), side, float(value)), 1, _columns(model, points, gradient)))
@@ -99,7 +101,7 @@ def _disk(model, plane, centre):
     radius = dist.min()
     if radius < width:
         return None
-    points = _nearest(dist - radius, tolerance)
+    points = _nearest(dist - radius, tolerance, model.cuts)
     gradient = np.zeros((len(points), model.states.shape[2]))
     for k, (d, s) in enumerate(points):
         gradient[k, list(plane)] = -p[d, s] / max(dist[d, s], 1e-12)
@@ -117,7 +119,7 @@ def _box(model, plane, centre, aspect):
     if half.min() < 0.5 * width:
         return None
     excess = np.abs(p) - half
-    points = _nearest(excess.max(axis=-1), tolerance)
+    points = _nearest(excess.max(axis=-1), tolerance, model.cuts)
     gradient = np.zeros((len(points), model.states.shape[2]))
     for k, (d, s) in enumerate(points):
         face = int(np.argmax(excess[d, s]))
@@ -126,10 +128,10 @@ def _box(model, plane, centre, aspect):
 
 
 def obstacle_candidates(model, plane, kind, centres=None, aspects=ASPECTS):
-    """Disks or boxes (``kind``) centred at ``centres`` (default: every cell centre of the plane)."""
+    """Disks or boxes (``kind``) centred at ``centres`` (default: every other cell centre of the plane)."""
     grid = model.problem.grid
     if centres is None:
-        centres = [np.array([a, b]) for a in grid.centers_1d(plane[0]) for b in grid.centers_1d(plane[1])]
+        centres = [np.array([a, b]) for a in grid.centers_1d(plane[0])[::2] for b in grid.centers_1d(plane[1])[::2]]
     made = [_disk(model, plane, c) for c in centres] if kind == "disk" else \
         [_box(model, plane, c, a) for c in centres for a in aspects]
     return [c for c in made if c is not None]
@@ -144,33 +146,74 @@ def _refined(model, plane, kind, best):
     return obstacle_candidates(model, plane, kind, centres, FINE_ASPECTS)
 
 
-def screen_rss(model, columns, new=0):
-    """The residual sum of squares of a nonnegative least-squares fit (scipy's NNLS) over the cost
-    weights (each at least 1 / COST_RANGE; the upper limit is left to :func:`exact_fit`) and the
-    multipliers of ``columns`` (>= 0), the rows of saturated controls left out; and how many of the
-    last ``new`` multipliers it used."""
-    keep = model.saturated == 0
-    A = np.hstack([model.G, columns])[keep]
-    K = model.G.shape[1]
-    b = -model.G[keep].sum(axis=1) / COST_RANGE                 # gamma = 1 / COST_RANGE + x, x >= 0
-    x, _ = scipy.optimize.nnls(A, b, maxiter=50 * A.shape[1])
-    r = A @ x - b
-    return float(r @ r), int(np.sum(x[x.size - new:] > 1e-9 * (1 / COST_RANGE + x[:K].max()))) if new else 0
+class Screen:
+    """Fast fits for ranking candidates: the rows of saturated controls left out (their multipliers
+    absorb them), the free costates projected out window by window, the cost weights at least
+    1 / COST_RANGE (the upper limit is left to :func:`exact_fit`), everything else >= 0 (scipy's NNLS)."""
+
+    def __init__(self, model):
+        self.keep = np.flatnonzero(model.saturated == 0)
+        self.K = model.G.shape[1]
+        window = model.window[self.keep]
+        self.block_of = np.full(self.keep.size, -1)            # kept row -> its block of free costates
+        self.blocks = []
+        for w in np.unique(window):
+            rows = np.flatnonzero(window == w)
+            F = model.free[self.keep[rows]]
+            F = F[:, np.abs(F).sum(axis=0) > 0]
+            if F.shape[1]:
+                q, r = np.linalg.qr(F)
+                q = q[:, np.abs(np.diag(r)) > 1e-10 * np.abs(r).max()]
+                self.block_of[rows] = len(self.blocks)
+                self.blocks.append((rows, q))
+        self.G = self.project(model.G[self.keep])
+        self.b = -self.G.sum(axis=1) / COST_RANGE                # gamma = 1 / COST_RANGE + x, x >= 0
+
+    @property
+    def rows(self):
+        return self.keep.size
+
+    def project(self, M):
+        """``M`` (kept rows, k) with the span of the free costates removed."""
+        M = np.array(M, dtype=float)
+        touched = self.block_of[np.abs(M).sum(axis=1) > 0]
+        for b in np.unique(touched[touched >= 0]):
+            rows, q = self.blocks[b]
+            M[rows] -= q @ (q.T @ M[rows])
+        return M
+
+    def columns(self, model, columns):
+        return self.project(columns[self.keep])
+
+    def fit(self, columns):
+        """(RSS, residual, multipliers used) of the cost weights and the (projected) ``columns``."""
+        A = np.hstack([self.G, columns])
+        x, _ = scipy.optimize.nnls(A, self.b, maxiter=50 * A.shape[1])
+        r = A @ x - self.b
+        return float(r @ r), r, int(np.sum(x[self.K:] > 1e-9 * (1 / COST_RANGE + x[:self.K].max())))
+
+    def added(self, residual, columns):
+        """(RSS, multipliers used) of the residual with the (projected) ``columns`` added, the rest held."""
+        if not columns.shape[1]:
+            return float(residual @ residual), 0
+        x, rnorm = scipy.optimize.nnls(columns, -residual, maxiter=50 * columns.shape[1])
+        return float(rnorm ** 2), int(np.sum(x > 1e-9 * max(x.max(), 1e-300)))
 
 
 def exact_fit(model, columns, new=0):
     """(RSS, multipliers used among the last ``new`` columns, gamma) of the KKT residual least squares
     solved with cvxpy (module docstring): cost weights in [1 / COST_RANGE, COST_RANGE], multipliers
-    >= 0, control-limit multipliers >= 0 at the saturated steps."""
+    >= 0, control-limit multipliers >= 0 at the saturated steps, the windows' end costates free."""
     K, k = model.G.shape[1], columns.shape[1]
     gamma, lam = cp.Variable(K), cp.Variable(k, nonneg=True)
     rows = np.flatnonzero(model.saturated)
     S = sp.csr_matrix((model.saturated[rows], (rows, np.arange(rows.size))), shape=(model.rows, rows.size))
-    mu = cp.Variable(rows.size, nonneg=True)
-    residual = model.G @ gamma + (columns @ lam if k else 0) + (S @ mu if rows.size else 0)
+    mu, nu = cp.Variable(rows.size, nonneg=True), cp.Variable(model.free.shape[1])
+    parts = [(model.G, gamma), (columns, lam), (S, mu), (sp.csr_matrix(model.free), nu)]
+    residual = sum(M @ v for M, v in parts if M.shape[1])
     cp.Problem(cp.Minimize(cp.sum_squares(residual)), [gamma >= 1 / COST_RANGE, gamma <= COST_RANGE]).solve(
         solver=cp.CLARABEL)
-    r = model.G @ gamma.value + (columns @ lam.value if k else 0) + (S @ mu.value if rows.size else 0)
+    r = sum(M @ v.value for M, v in parts if M.shape[1])
     used = int(np.sum(lam.value[k - new:] > 1e-6 * gamma.value.max())) if new else 0
     return float(r @ r), used, gamma.value
 
@@ -181,34 +224,77 @@ def bic_gain(rows, rss0, rss1, used, parameters, floor):
     return rows * math.log(max(rss0, floor) / max(rss1, floor)) - (used + parameters) * math.log(rows)
 
 
-def _candidates(model, families, plane, taken):
+def _polished(screen, model, plane, kind, start, taken):
+    """The obstacle of ``kind`` whose centre (and, for a box, log aspect ratio) minimises the screened
+    residual, by Nelder-Mead from the ``start`` candidate (the parameters are continuous)."""
+    region = start.region
+    if kind == "disk":
+        x0 = np.asarray(region.center, dtype=float)
+        make = lambda v: _disk(model, plane, v)
+    else:
+        half = 0.5 * (np.asarray(region.high) - np.asarray(region.low))
+        x0 = np.r_[0.5 * (np.asarray(region.low) + np.asarray(region.high)), math.log(half[0] / half[1])]
+        make = lambda v: _box(model, plane, v[:2], math.exp(v[2]))
+
+    def rss(v):
+        c = make(v)
+        return math.inf if c is None else screen.fit(np.hstack([taken, screen.columns(model, c.columns)]))[0]
+
+    width, _ = _plane_scales(model, plane)
+    simplex = np.vstack([x0] + [x0 + 0.25 * width * e for e in np.eye(x0.size)])
+    out = scipy.optimize.minimize(rss, x0, method="Nelder-Mead",
+                                  options={"initial_simplex": simplex, "xatol": 1e-3, "fatol": 0.0, "maxfev": 150})
+    return make(out.x)
+
+
+def _candidates(model, families, plane):
     out = bound_candidates(model) if "bound" in families else []
     for kind in ("disk", "box"):
         if kind in families:
-            found = obstacle_candidates(model, plane, kind)
-            if found:
-                best = max(found, key=lambda c: -screen_rss(model, np.hstack([taken, c.columns]))[0])
-                found += _refined(model, plane, kind, best)
-            out += found
+            out += obstacle_candidates(model, plane, kind)
     return out
+
+
+def _ranked(screen, model, candidates, taken, base, floor):
+    """(BIC gain, candidate) pairs, best first: every candidate ranked by adding its multipliers to the
+    fit without it, the best SHORTLIST refitted with the cost weights free again."""
+    rss0, r0, _ = base
+    quick = []
+    for c in candidates:
+        rss, used = screen.added(r0, screen.columns(model, c.columns))
+        quick.append((bic_gain(screen.rows, rss0, rss, used, c.parameters, floor), c))
+    quick.sort(key=lambda item: -item[0])
+    full = []
+    for _, c in quick[:SHORTLIST]:
+        rss, _, used = screen.fit(np.hstack([taken, screen.columns(model, c.columns)]))
+        used = min(used, c.columns.shape[1])
+        full.append((bic_gain(screen.rows, rss0, rss, used, c.parameters, floor), c))
+    return sorted(full, key=lambda item: -item[0])
 
 
 def kkt_inference(spec, recording, rounds=ROUNDS):
     """Constraints of the system file ``spec``'s families (its [candidates]) from ``recording`` by
     the KKT conditions (module docstring): a :class:`KKTResult`."""
     model = kkt_model(spec.problem, recording)
+    screen = Screen(model)
     families, plane = spec.candidates["families"], spec.candidates["plane"]
-    taken, accepted, log = np.zeros((model.rows, 0)), [], []
-    rows = int(np.sum(model.saturated == 0))
+    taken, taken_screen, accepted, log = np.zeros((model.rows, 0)), np.zeros((screen.rows, 0)), [], []
     floor = PRECISION * float(np.sum(model.G ** 2))
     for _ in range(rounds):
-        base, _ = screen_rss(model, taken)
-        fresh = [c for c in _candidates(model, families, plane, taken) if c.region not in accepted]
-        scored = [(c, *screen_rss(model, np.hstack([taken, c.columns]), c.columns.shape[1])) for c in fresh]
-        scored = [(bic_gain(rows, base, rss, used, c.parameters, floor), c) for c, rss, used in scored]
-        if not scored:
+        base = screen.fit(taken_screen)
+        found = [c for c in _candidates(model, families, plane) if c.region not in accepted]
+        ranked = _ranked(screen, model, found, taken_screen, base, floor)
+        for kind in ("disk", "box"):                     # refine the best obstacle of each kind
+            best = next((c for _, c in ranked if c.region.kind == kind), None)
+            if best is not None:
+                finer = _refined(model, plane, kind, best)
+                finer.append(_polished(screen, model, plane, kind, max(finer, key=lambda c: -screen.fit(
+                    np.hstack([taken_screen, screen.columns(model, c.columns)]))[0]), taken_screen))
+                ranked = _ranked(screen, model, [c for _, c in ranked] + [c for c in finer if c is not None],
+                                 taken_screen, base, floor)
+        if not ranked:
             return KKTResult(accepted, "no candidate", log)
-        _, best = max(scored, key=lambda item: item[0])
+        best = ranked[0][1]
         rss0, _, _ = exact_fit(model, taken)
         rss1, used, gamma = exact_fit(model, np.hstack([taken, best.columns]), best.columns.shape[1])
         gain = bic_gain(model.rows, rss0, rss1, used, best.parameters, floor)
@@ -218,4 +304,5 @@ def kkt_inference(spec, recording, rounds=ROUNDS):
             return KKTResult(accepted, f"stopped: the best candidate does not lower the BIC ({gain:.1f})", log)
         accepted.append(best.region)
         taken = np.hstack([taken, best.columns])
+        taken_screen = np.hstack([taken_screen, screen.columns(model, best.columns)])
     return KKTResult(accepted, f"stopped after {rounds} rounds", log)
