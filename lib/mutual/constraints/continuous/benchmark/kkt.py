@@ -18,8 +18,9 @@ the costates backwards, nu_L = grad w + lambda_L grad g(x_L), nu_t = grad_x l dt
 which is LINEAR in the cost weights gamma and the multipliers (:func:`kkt_model` eliminates nu).
 On an unstable system (the cart-pole) the backward recursion grows like the falling pole, e^(4.6 t),
 and over 5 s swamps every number, so each demonstration is cut into windows, wherever the recursion
-has grown by ``GROWTH`` (:func:`window_ends`; the pendulum, the double integrator and the car are
-never cut), whose final costates are left free (the KKT conditions of a locally optimal trajectory
+has grown by ``GROWTH`` (:func:`window_ends`; on the benchmark the cart-pole three times per
+demonstration, a pendulum now and then near upright, the double integrator and the car never),
+whose final costates are left free (the KKT conditions of a locally optimal trajectory
 hold on each piece with an unknown terminal costate): r = G gamma + C lambda + mu + F nu_free.
 The cost is "uncertain" as in the RA-L paper: gamma weighs the terms of the user's system-file
 cost (gamma = 1 is the file's own), each within a factor 2 of it (a box of cost parameters; a
