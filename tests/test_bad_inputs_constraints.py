@@ -151,8 +151,8 @@ CASES = [
     (inference_run, (), dict(n_demos=0), ValueError, "n_demos"),
     # the demonstrations CSV: file, line and column
     (_empty_file, (), {}, ValueError, "is empty"),
-    (_load_edited, (lambda lines: lines[:1],), {}, ValueError, "no rows"),
-    (_load_edited, (lambda lines: [line.rsplit(",", 1)[0] for line in lines],), {}, ValueError, "missing columns"),
+    (_load_edited, (lambda lines: lines[:1],), {}, ValueError, "no data rows"),
+    (_load_edited, (lambda lines: [line.rsplit(",", 1)[0] for line in lines],), {}, ValueError, "missing column 'action'"),
     (_load_edited, (_replace(4, "action", "north"),), {}, ValueError, "line 4, column 'action'"),
     (_load_edited, (_replace(10, "action", "99"),), {}, ValueError, "last row"),
     (_load_edited, (_replace(5, "state", "2.5"),), {}, ValueError, "line 5, column 'state'"),

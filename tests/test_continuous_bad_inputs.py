@@ -88,7 +88,7 @@ def test_unequal_durations_can_be_truncated(tmp_path):
 @pytest.mark.parametrize("text, phrase", [
     ("", "the file is empty"),
     ("demo,t,theta\n", "line 1: missing column 'theta_dot'"),
-    (PENDULUM_CSV, "no rows after the header"),
+    (PENDULUM_CSV, "no data rows after the header"),
     (PENDULUM_CSV + "a,0,zero,0,3\na,0.1,0,0,3\n", r"line 2, column 'theta': 'zero' is not a finite number"),
     (PENDULUM_CSV + "a,0,0,nan,3\na,0.1,0,0,3\n", r"line 2, column 'theta_dot'"),
     (PENDULUM_CSV + "a,0,0,0,3\n,0.1,0,0,3\n", "line 3, column 'demo': empty"),
@@ -146,7 +146,7 @@ def changed(path, value):
     ("reward.temperature", -1.0, "key 'reward.temperature'"),
     ("candidates.families", ["blob"], "unknown family 'blob'"),
     ("simulate.hidden", ["speed < 3"], "'speed' is not a state coordinate"),
-    ("simulate.demonstrator", "human", "must be 'soft' or 'mppi'"),
+    ("simulate.demonstrator", "human", "must be one of ['soft', 'mppi']"),
     ("system", "rocket", "key 'system'"),
 ])
 def test_a_bad_system_file_names_the_key(path, value, phrase):

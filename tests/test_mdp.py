@@ -159,7 +159,7 @@ def test_demonstrations_csv_round_trip(tmp_path):
 @pytest.mark.parametrize("edit, message", [
     (lambda df: df.assign(state=df["state"].where(df.index != 3, 99)), "unknown state"),
     (lambda df: df.assign(action=df["action"].where(df.index != 2, 12)), "unknown action"),
-    (lambda df: df.drop(columns="action"), "missing columns"),
+    (lambda df: df.drop(columns="action"), "missing column 'action'"),
     (lambda df: df.assign(t=df["t"].where(df.index != 2, 7)), "t must run"),
 ])
 def test_loader_rejects_bad_files(tmp_path, edit, message):

@@ -14,7 +14,7 @@ import pytest
 from statsmodels.stats.anova import AnovaRM
 
 from mutual.cli import main
-from mutual.csvfile import format_exact, read_text_csv
+from mutual.inputs import format_exact, read_csv as read_text_csv
 from mutual.study import paired_t_holm, read_table, rm_anova, write_table
 from mutual.study.stats import greenhouse_geisser_epsilon
 

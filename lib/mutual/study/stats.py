@@ -144,7 +144,7 @@ class RMAnova:
 
 def _distinct_levels(columns):
     """Refuse a wide table whose level columns repeat a name (a pair would be tested twice, or with itself)."""
-    from ..csvfile import check_names
+    from ..inputs import check_names
     seen = set()
     for name in columns:
         if name in seen:
