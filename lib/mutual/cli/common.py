@@ -7,10 +7,13 @@ Only the standard library is imported at module level, so that ``mutual --help``
 numpy, pandas and matplotlib are imported inside the functions that need them.
 """
 
+import argparse
 import json
 import math
 import os
+import re
 import sys
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -23,6 +26,26 @@ class InputError(Exception):
 
 class OutputError(Exception):
     """The outputs could not be written (a full disk, say); nothing was left in --out: one line, exit status 1."""
+
+
+#: an option value that starts with '-' but is a number or a list of numbers: -1, -0.5, -1e-3, -inf, -1,1
+_NEGATIVE_VALUE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,.*)?$|^-(inf|infinity|nan)(,.*)?$", re.I)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse's parser for every ``mutual`` command: an option's value that starts with '-' and reads as a
+    number or a comma-separated list of numbers (``--w-max -1,1``, ``--rho -0.5``) is a value, not an option;
+    for any other value that starts with '-' the error says to write ``--option=VALUE``."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_VALUE
+
+    def error(self, message):
+        option = re.match(r"argument (--[\w-]+)(/-\w)?: expected one argument", message)
+        if option:
+            message += f" (a value that starts with '-' is written {option.group(1)}=VALUE)"
+        super().error(message)
 
 
 def add_output_options(parser):
@@ -244,7 +267,9 @@ def run(args, prog):
     """
     try:
         check_out(args)
-        args.handler(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning(prog)
+            args.handler(args)
         return EXIT_OK
     except InputError as err:
         return _fail(prog, str(err), EXIT_BAD_INPUT)
@@ -263,6 +288,16 @@ def run(args, prog):
             raise
         return _fail(prog, f"{type(err).__name__}: {_first_line(err)} (set MUTUAL_DEBUG=1 for the traceback)",
                      EXIT_FAILED)
+
+
+def _show_warning(prog):
+    """Warnings about the input (:class:`mutual.inputs.InputWarning`) as one line ``PROG: warning: ...`` on stderr."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        if category.__name__ == "InputWarning":
+            print(f"{prog}: warning: {message}", file=sys.stderr)
+        else:
+            print(warnings.formatwarning(message, category, filename, lineno, line).rstrip(), file=sys.stderr)
+    return show
 
 
 def _fail(prog, message, status):

@@ -12,7 +12,7 @@ one wording: ``NAME must be a number in [0, 1], got 1.5``.
 import math
 import numbers
 
-__all__ = ["check_number", "count", "describe", "finite", "number", "number_text", "positive", "probability", "real", "shown"]
+__all__ = ["check_number", "count", "describe", "exact_doubles", "finite", "number", "number_text", "positive", "probability", "real", "shown"]
 
 
 def real(value):
@@ -117,3 +117,21 @@ def number(name, value):
 def probability(name, value):
     """``value`` as a float strictly between 0 and 1 (a level, a power, a confidence), else a ValueError."""
     return check_number(name, value, 0, 1, low_open=True, high_open=True)
+
+
+def exact_doubles(name, values):
+    """``values`` (numbers; integers of any size, numpy's or Python's) as float64, refusing two that differ but read
+    as the same double -- integers beyond 2^53, say -- with a ValueError naming ``name``: a statistic of them would
+    see no difference where the data have one."""
+    import numpy as np
+    raw = np.asarray(values)
+    floats = raw.astype(float)
+    if raw.dtype.kind in "iuO" and raw.size:
+        exact = {}
+        for v, f in zip(raw.tolist(), floats.tolist()):
+            first = exact.setdefault(f, v)
+            if first != v:
+                raise ValueError(f"{name}: {first} and {v} differ only beyond the 15-17 significant digits of a double "
+                                 f"(both read as {number_text(f)}), so no statistic can tell them apart; subtract a "
+                                 "common offset (or change the unit) and run again")
+    return floats

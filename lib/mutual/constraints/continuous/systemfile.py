@@ -124,9 +124,9 @@ def check_vectorized(keys, problem):
     x = grid.low + (grid.high - grid.low) * ((np.arange(N)[:, None] + 0.5) / N + 0.37 * np.arange(grid.ndim)) % 1
     u = problem.controls[np.arange(N) % len(problem.controls)]
     shape = f"states x of shape {x.shape} and controls u of shape {u.shape}"
-    vectorized = (f"the dynamics must take a batch: states x (N, {grid.ndim}) and controls u (N, "
-                  f"{u.shape[1]}), and return dx/dt (N, {grid.ndim}) -- x[:, 0] for the first coordinate of "
-                  "every state, np.stack([...], axis=1) for the result")
+    vectorized = (f"the dynamics must take a batch of states x (N, {grid.ndim}) and controls u (N, {u.shape[1]}) and "
+                  f"return dx/dt (N, {grid.ndim}); a function written for one state at a time fails so: write "
+                  "x[:, 0] for the first coordinate of every state, np.stack([...], axis=1) for the result")
     try:
         system.f(x, u)
     except ValueError as err:
