@@ -3,6 +3,7 @@ sys.exit included -- is a ValueError naming the module, its file and the line, a
 documented one: the file's own folder first, then installed modules, nothing else."""
 
 import importlib.util
+import os
 import sys
 import textwrap
 
@@ -58,10 +59,27 @@ def test_the_files_folder_comes_first_and_nothing_else(tmp_path, monkeypatch):
         load_function("elsewhere_dyn:f", tmp_path / "mine")
 
 
-def test_a_local_module_named_like_a_loaded_one_is_refused(tmp_path):
-    (tmp_path / "json.py").write_text("def f(x, u):\n    return x\n")
-    with pytest.raises(ValueError, match="the name 'json' is taken by a module already loaded from"):
-        load_function("json:f", tmp_path)
+def test_a_local_module_is_read_from_its_file_whatever_else_has_its_name(tmp_path):
+    """``json.py`` beside the file is the one named, though Python's json is loaded; two folders' ``dynamics.py``
+    are two modules; an edited file is read again."""
+    (tmp_path / "json.py").write_text("def f(x, u):\n    return 'local json'\n")
+    assert load_function("json:f", tmp_path).function(0, 0) == "local json" and sys.modules["json"].dumps
+    for name in ("one", "two"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "dyn_twice.py").write_text(f"def f(x, u):\n    return {name!r}\n")
+    assert [load_function("dyn_twice:f", tmp_path / n).function(0, 0) for n in ("one", "two")] == ["one", "two"]
+    path = tmp_path / "one" / "dyn_twice.py"
+    path.write_text("def f(x, u):\n    return 'edited'\n")
+    os.utime(path, ns=(path.stat().st_atime_ns, path.stat().st_mtime_ns + 10 ** 9))
+    assert load_function("dyn_twice:f", tmp_path / "one").function(0, 0) == "edited"
+
+
+def test_a_package_beside_the_file_with_a_submodule(tmp_path):
+    (tmp_path / "mydyn").mkdir()
+    (tmp_path / "mydyn" / "__init__.py").write_text("from .helpers import SCALE\n")
+    (tmp_path / "mydyn" / "helpers.py").write_text("SCALE = 2\n")
+    (tmp_path / "mydyn" / "cars.py").write_text("from . import SCALE\ndef f(x, u):\n    return SCALE * x\n")
+    assert load_function("mydyn.cars:f", tmp_path).function(3, 0) == 6
 
 
 def test_an_installed_module_is_found_and_named(tmp_path):

@@ -163,7 +163,7 @@ def run_infer_continuous(args):
         raise common.InputError(f"--families {args.families}: unknown family {unknown[0]!r}; choose from "
                                 f"{', '.join(FAMILIES)}")
     system = problem.system
-    with common.about(traj_path):
+    with common.about(traj_path), _dynamics_errors(system_path, system):
         recording = read_recording(traj_path, system.state_names, system.control_names)
         check_recording(problem, recording, args.truncate)
     scheduler = "inline" if args.inline else (args.scheduler or "auto")

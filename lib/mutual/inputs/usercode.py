@@ -2,9 +2,10 @@
 
 Naming a module RUNS its code: importing it executes the module, whatever it does. So the lookup is
 plain and said in the output (:attr:`UserFunction.file`): ``module.py`` (or the package ``module/``) in
-the folder of the file that names it first, then an installed module of that name. Nothing else on the
-path is searched before the installed modules; while the user's module is imported its own folder is on
-the path, so that it can import its neighbours.
+the folder of the file that names it first -- read from that file, whatever else is loaded under the same
+name --, then an installed module of that name. Nothing else on the path is searched before the installed
+modules; while the user's module is imported its own folder is on the path, so that it can import its
+neighbours.
 
 A failure is a ValueError naming the input, the module, the file and the function -- never a raw
 traceback, and never the end of the run: an exception or ``sys.exit`` at import
@@ -13,6 +14,7 @@ it is imported goes to stderr, so that a ``--json`` answer on stdout stays one J
 """
 
 import contextlib
+import hashlib
 import importlib
 import importlib.util
 import sys
@@ -54,18 +56,30 @@ def _failure(err, file):
 
 
 def _import(module, local, folder):
-    """Import ``module``; from ``folder`` (first on the path while it is imported) when ``local`` is its file there."""
+    """Import ``module``: the installed one, or -- when ``local`` is its file in ``folder`` -- that file, under a
+    name of its own (``mutual_user_<name>_<digest of its path and time>``), so that two folders' ``dynamics.py``
+    never stand for each other and an edited file is read again. ``folder`` is first on the path meanwhile."""
     if local is None:
         return importlib.import_module(module)
+    top, _, rest = module.partition(".")
+    top_file = Path(folder) / f"{top}.py"
+    top_file = top_file if top_file.is_file() else Path(folder) / top / "__init__.py"
+    digest = hashlib.sha1(f"{top_file.resolve()}:{top_file.stat().st_mtime_ns}".encode()).hexdigest()[:12]
+    name = f"mutual_user_{top}_{digest}"
     sys.path.insert(0, str(folder))
     try:
-        top = module.split(".")[0]
-        if top in sys.modules:
-            held = getattr(sys.modules[top], "__file__", None)
-            if held is None or not Path(held).resolve().is_relative_to(Path(folder).resolve()):
-                raise ValueError(f"the name {top!r} is taken by a module already loaded from {held or 'Python itself'}; "
-                                 f"rename {local}")
-        return importlib.import_module(module)
+        if name not in sys.modules:
+            spec = importlib.util.spec_from_file_location(
+                name, top_file, submodule_search_locations=[str(top_file.parent)] if top_file.name == "__init__.py"
+                else None)
+            loaded = importlib.util.module_from_spec(spec)
+            sys.modules[name] = loaded
+            try:
+                spec.loader.exec_module(loaded)
+            except BaseException:
+                del sys.modules[name]
+                raise
+        return importlib.import_module(f"{name}.{rest}") if rest else sys.modules[name]
     finally:
         with contextlib.suppress(ValueError):
             sys.path.remove(str(folder))

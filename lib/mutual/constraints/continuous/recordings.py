@@ -201,32 +201,38 @@ def _check_control_range(problem, recording):
                  "snapped to the nearest control of the set, so check the unit (or widen [control] values)")
 
 
-def _misses(problem, x, nxt):
-    """The best one-step prediction's distance, in cell widths, from each state x (k, n) to nxt (k, n)."""
-    grid, A = problem.grid, problem.n_actions
-    pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
-    diff = pred - nxt[:, None, :]
+def _distance(grid, a, b):
+    """Distances (in cell widths, periodic coordinates the short way round) between states a (..., n) and b."""
+    diff = a - b
     for i in np.flatnonzero(grid.periodic):
         period = grid.high[i] - grid.low[i]
-        diff[:, :, i] = np.mod(diff[:, :, i] + period / 2, period) - period / 2
+        diff[..., i] = np.mod(diff[..., i] + period / 2, period) - period / 2
     scale = np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
-    return np.sqrt(((diff / scale) ** 2).sum(axis=2)).min(axis=1)
+    return np.sqrt(((diff / scale) ** 2).sum(axis=-1))
+
+
+def _misses(problem, x, nxt):
+    """The best one-step prediction's distance from each state x (k, n) to nxt (k, n), in cell widths."""
+    A = problem.n_actions
+    pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
+    return _distance(problem.grid, pred, nxt[:, None, :]).min(axis=1)
 
 
 def _check_time_direction(problem, recording, states, most=2000):
-    """Refuse recordings whose states, in the order of t, follow the dynamics backwards: every step's best
-    one-step prediction misses the next state, while a step taken from the next state lands on the previous one."""
+    """Refuse recordings whose states, in the order of t, follow the dynamics backwards: each step's best one-step
+    prediction misses the next state by more than half the step, while a step taken from the next state lands
+    on the previous one (a quarter of that miss or nearer)."""
     n = states.shape[2]
     x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
     pick = np.linspace(0, len(x) - 1, min(most, len(x))).astype(int)
     x, nxt = problem.grid.wrap(x[pick]), problem.grid.wrap(nxt[pick])
-    forward = float(np.median(_misses(problem, x, nxt)))
-    if forward <= 1.0:
+    forward, step = float(np.median(_misses(problem, x, nxt))), float(np.median(_distance(problem.grid, nxt, x)))
+    if not forward > max(0.5 * step, 0.05):           # the dynamics explain the steps (or nothing moves)
         return
     backward = float(np.median(_misses(problem, nxt, x)))
     if backward < 0.25 * forward:
         raise ValueError(f"{recording.source}, column 't': the recorded motion runs backwards in time: in the order "
                          f"of t, the dynamics' best one-step prediction misses the next state by {forward:.3g} cell "
-                         f"widths (median), but a step from the next state lands {backward:.3g} from the previous "
-                         "one; t seems to decrease along the motion (a time-to-go, or its sign): make t increase "
-                         "as the motion goes")
+                         f"widths (median; the steps are {step:.3g}), but a step from the next state lands "
+                         f"{backward:.3g} from the previous one; t seems to decrease along the motion (a time-to-go, "
+                         "or its sign): make t increase as the motion goes")

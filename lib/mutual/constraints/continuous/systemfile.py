@@ -102,9 +102,9 @@ def _problem(keys, system):
                          reward.numbers("control_weights", m, 0, [0.0] * m),
                          reward.numbers("terminal_weights", n, 0, [0.0] * n),
                          reward.number("temperature", 0, low_open=True, default=1.0))
-    scheme = disc.choice("scheme", SCHEMES, default="sample")
+    scheme, controls = disc.choice("scheme", SCHEMES, default="sample"), _controls(control, m)
     try:
-        problem = Problem(system, grid, _controls(control, m), time.number("dt", 0, low_open=True),
+        problem = Problem(system, grid, controls, time.number("dt", 0, low_open=True),
                           time.number("horizon", 1, integer=True), rw, scheme,
                           disc.number("samples", 1, integer=True, default=16),
                           time.number("substeps", 1, integer=True, default=4),
