@@ -11,17 +11,19 @@ from hypothesis import strategies as st
 from mutual.inputs import check_number, count, exact_doubles, number_text, positive, probability, real
 
 CASES = [  # (value, bounds and kind, the message after "x must ")
-    (-1, dict(low=0, low_open=True), "be a number > 0, got -1"),
-    (float("inf"), dict(low=0, low_open=True), "be a finite number > 0, got inf"),
-    ("3", dict(low=0), "be a finite number >= 0, got '3'"),
+    (-1, dict(low=0, low_open=True), "be a positive finite number, got -1"),
+    (float("inf"), dict(low=0, low_open=True), "be a positive finite number, got inf"),
+    ("3", dict(low=0), "be a non-negative finite number, got '3'"),
+    (-3, dict(low=-2), "be a number >= -2, got -3"),
+    (0.0, dict(low=0, high=1, low_open=True, high_open=True), "lie strictly between 0 and 1, got 0.0"),
     (True, {}, "be a finite number, got True"),
     (1.5, dict(low=0, high=1), "be a number in [0, 1], got 1.5"),
     (1.0, dict(low=0, high=1, high_open=True), "be a number in [0, 1), got 1.0"),
     (-0.5000001, dict(low=-0.5, high=1), "be a number in [-0.5, 1], got -0.5000001"),
     (2.5, dict(low=1, integer=True), "be an integer >= 1, got 2.5"),
-    (4.0, dict(low=1, integer=True), "be an integer >= 1, got 4.0"),
+    (4.0, dict(low=2, integer=True), "be an integer >= 2, got 4.0"),
     (51, dict(low=0, high=50, integer=True), "be an integer in 0..50, got 51"),
-    (2.5, dict(low=1, whole=True), "be a whole number >= 1, got 2.5"),
+    (2.5, dict(low=1, whole=True), "be an integer >= 1, got 2.5"),
     (10 ** 400, dict(low=1, integer=True), "be an integer >= 1, got 10000000000000000000...(401 characters)"),
     (np.float64(np.nan), {}, "be a finite number, got nan"),
     (None, dict(low=1, high=3), "be a finite number in [1, 3], got None"),
@@ -46,10 +48,10 @@ def test_good_values_pass_as_numbers(value, bounds, expected):
 
 def test_the_shortcuts_are_the_same_checks():
     assert positive("p", 2) == 2.0 and count("n", 40.0) == 40 and probability("a", 0.05) == 0.05
-    for call, phrase in [(lambda: positive("p", 0), "p must be a number > 0"),
-                         (lambda: count("n", 0), "n must be a whole number >= 1"),
-                         (lambda: probability("a", 1), "a must be a number in (0, 1)"),
-                         (lambda: check_number("key 'k'", -1, low=0, sep=": "), "key 'k': must be a number >= 0")]:
+    for call, phrase in [(lambda: positive("p", 0), "p must be a positive finite number"),
+                         (lambda: count("n", 0), "n must be an integer >= 1"),
+                         (lambda: probability("a", 1), "a must lie strictly between 0 and 1"),
+                         (lambda: check_number("key 'k'", -1, low=0, sep=": "), "key 'k': must be a non-negative")]:
         with pytest.raises(ValueError, match=phrase.replace("(", r"\(").replace(")", r"\)")):
             call()
 

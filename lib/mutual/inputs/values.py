@@ -49,7 +49,9 @@ def shown(value, limit=40):
 def describe(low=None, high=None, low_open=False, high_open=False, whole=False, integer=False, finite=False):
     """What a value within these bounds is, in words: ``a number in [0, 1]``, ``an integer >= 1``, ...
     (``finite``: say "finite", for a value that is not)."""
-    noun = "an integer" if integer else "a whole number" if whole else "a finite number" if finite else "a number"
+    noun = "an integer" if integer or whole else "a finite number" if finite else "a number"
+    if high is None and low == 0 and not (integer or whole):
+        return "a positive finite number" if low_open else "a non-negative finite number"
     if low is not None and high is not None and not (math.isinf(low) or math.isinf(high)):
         if integer or whole:
             return f"{noun} in {number_text(low)}..{number_text(high)}"
@@ -68,7 +70,7 @@ def check_number(name, value, low=None, high=None, low_open=False, high_open=Fal
     else a ValueError ``NAME must be <what>, got VALUE``.
 
     ``integer``: an int (numpy's too), never a float; ``whole``: any real number without a fraction
-    (``40.0`` counts); ``what``: the words after "must" (default: "be " + :func:`describe`); ``sep``: between the
+    (``40.0`` counts; both are "an integer" in the message); ``what``: the words after "must" (default: "be " + :func:`describe`); ``sep``: between the
     name and "must" (``": "`` for ``key 'x': must ...``).
     """
     x = real(value)
@@ -82,7 +84,8 @@ def check_number(name, value, low=None, high=None, low_open=False, high_open=Fal
     if ok and high is not None:
         ok = x < high if high_open else x <= high
     if not ok:
-        said = what or "be " + describe(low, high, low_open, high_open, whole, integer,
+        strictly = (low, high, low_open, high_open) == (0, 1, True, True) and not (integer or whole)
+        said = what or "lie strictly between 0 and 1" if strictly else what or "be " + describe(low, high, low_open, high_open, whole, integer,
                                         finite=x is None or not math.isfinite(x))
         raise ValueError(f"{name}{sep}must {said}, got {shown(value)}")
     if integer or whole:
