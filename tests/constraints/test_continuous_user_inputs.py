@@ -180,6 +180,22 @@ def test_mistakes_in_system_files_name_the_file_and_the_key(case, spec, values, 
     assert str(err.value).startswith(str(path)) and all(p in str(err.value) for p in phrases), err.value
 
 
+@pytest.mark.parametrize("low, high, phrase", [
+    ([-180.0, -8.0], [180.0, 8.0], "wraps with period high - low = 360, not 2 pi = 6.28319 (degrees?)"),
+    ([0.0, -8.0], [3.14159, 8.0], "wraps with period high - low = 3.14159, not 2 pi"),
+])
+def test_a_periodic_angle_whose_box_is_not_one_turn_in_radians_is_refused(low, high, phrase):
+    mapping = {"system": "pendulum", "state": {"low": low, "high": high, "cells": [9, 9], "periodic": ["theta"]},
+               "control": {"values": [-3.0, 3.0]}, "time": {"dt": 0.1, "horizon": 10}, "reward": {"goal": [0.0, 0.0]}}
+    with pytest.raises(ValueError, match=r"s\.toml: key 'state\.high': the periodic coordinate 'theta' \(rad\)"):
+        system_from_mapping(mapping, "s.toml")
+    with pytest.raises(ValueError) as err:
+        system_from_mapping(mapping, "s.toml")
+    assert phrase in str(err.value)
+    mapping["state"].update(low=[0.0, -8.0], high=[2 * np.pi, 8.0])
+    system_from_mapping(mapping, "s.toml")                                   # [0, 2 pi] is one turn too
+
+
 def test_the_cli_runs_a_two_dimensional_control_end_to_end(tmp_path, capsys):
     """simulate writes both control columns; infer-continuous reads them back and snaps every recorded step to
     a control of the 2-D set (the demonstrator used only controls of the set: each snaps to itself)."""

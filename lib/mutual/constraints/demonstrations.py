@@ -180,7 +180,7 @@ def load_demonstrations(path, mdp):
     """
     frame = read_csv(path, DEMONSTRATION_COLUMNS)       # names the file and line of every malformed row
     values = {c: _integers(frame, c, allow_empty=(c == "action")) for c in DEMONSTRATION_COLUMNS}
-    line = frame.attrs["lines"]
+    line = np.asarray(frame.attrs["lines"])
     order = np.lexsort((values["t"], values["demo"]))
     demo, t, state, action, line = (a[order] for a in (values["demo"], values["t"], values["state"],
                                                         values["action"], line))

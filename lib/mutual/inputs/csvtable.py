@@ -118,7 +118,7 @@ def read_csv(path, columns=None):
     """The table in the CSV file ``path``: a DataFrame of text exactly as written, NaN where a cell is
     empty, the header's names without surrounding spaces. ``columns``: names that must be present.
 
-    ``frame.attrs`` holds ``source`` (the path) and ``lines`` (each row's line in the file) for
+    ``frame.attrs`` holds ``source`` (the path) and ``lines`` (a tuple: each row's line in the file) for
     :func:`place` and :func:`line_of`. A ValueError names the file (and the line) for an empty file,
     a header without rows, a repeated column name, another delimiter, a row with the wrong number of
     fields, a missing column, a malformed CSV or bytes that are not UTF-8.
@@ -145,7 +145,7 @@ def read_csv(path, columns=None):
              for j, name in enumerate(header)}
     frame = pd.DataFrame(cells, columns=header)
     frame.attrs["source"] = str(path)
-    frame.attrs["lines"] = np.array([line for line, _, _ in body])
+    frame.attrs["lines"] = tuple(line for line, _, _ in body)      # a tuple: pandas compares attrs when it joins
     offsets = {(i, header[j]): o for i, (_, _, offs) in enumerate(body) if offs for j, o in enumerate(offs) if o}
     if offsets:
         frame.attrs["offsets"] = offsets

@@ -87,7 +87,7 @@ def read_recording(path, state_names, control_names=()):
         raise ValueError(f"{path}, line 1: has control column {present[0]!r} but not "
                          f"{[c for c in control_names if c not in present][0]!r}; give all controls or none")
     controls = np.stack([number_column(frame, c, True) for c in control_names], axis=1) if present else None
-    line = frame.attrs["lines"]
+    line = np.asarray(frame.attrs["lines"])
     out = {"ids": [], "times": [], "states": [], "controls": [], "lines": []}
     for ident in dict.fromkeys(ids):                       # in order of first appearance
         rows = np.flatnonzero(ids == ident)

@@ -96,6 +96,11 @@ def _problem(keys, system):
     if any(h <= lo for lo, h in zip(low, high)):
         state.fail("high", "every high must exceed its low")
     cells = state.numbers("cells", n, low=2, integer=True)
+    for name, unit, lo, hi in zip(system.state_names, system.state_units, low, high):
+        if name in system.periodic and unit == "rad" and abs(hi - lo - 2 * np.pi) > 1e-3 * 2 * np.pi:
+            state.fail("high", f"the periodic coordinate {name!r} (rad) wraps with period high - low = {hi - lo:.6g}, "
+                               f"not 2 pi = {2 * np.pi:.6g}{' (degrees?)' if abs(hi - lo - 360) < 1e-6 else ''}: give "
+                               "its box in radians, one turn wide (e.g. [-3.141592653589793, 3.141592653589793])")
     grid = Grid.uniform(low, high, cells, [name in system.periodic for name in system.state_names],
                         system.state_names, system.state_units)
     rw = QuadraticReward(reward.numbers("goal", n), reward.numbers("state_weights", n, 0, [1.0] * n),
