@@ -18,14 +18,14 @@ numpy, not pandas (pandas is imported by the functions that build tables).
 """
 
 from .columns import name_column, number_column, require_columns
-from .csvtable import format_exact, line_of, place, read_csv, write_csv
+from .csvtable import Lines, format_exact, line_of, place, read_csv, write_csv
 from .names import check_names, name_key
 from .tomltable import MAX_DEPTH, Keys, read_toml
 from .units import InputWarning, angle_unit_warning, warn
 from .usercode import UserFunction, call, load_function
 from .values import check_number, count, describe, exact_doubles, finite, number, number_text, positive, probability, real, shown
 
-__all__ = ["InputWarning", "Keys", "MAX_DEPTH", "UserFunction", "angle_unit_warning", "call", "check_names",
+__all__ = ["InputWarning", "Keys", "Lines", "MAX_DEPTH", "UserFunction", "angle_unit_warning", "call", "check_names",
            "check_number", "count", "describe", "exact_doubles", "finite", "format_exact", "line_of", "load_function", "name_column", "name_key", "number",
            "number_column", "number_text", "place", "positive", "probability", "read_csv", "read_toml", "real", "require_columns", "shown",
            "warn", "write_csv"]

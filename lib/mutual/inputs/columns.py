@@ -20,8 +20,12 @@ def require_columns(frame, columns):
                          f"expected {', '.join(map(str, columns))})")
 
 
-def _text(value):
-    return "" if value is None or (isinstance(value, float) and np.isnan(value)) else str(value)
+def _texts(column):
+    """A column's cells as text as written, an object array ("" where empty; numbers as Python writes them)."""
+    cells = column.to_numpy(dtype=object)
+    missing = column.isna().to_numpy()
+    return np.array(["" if gone else v if isinstance(v, str) else str(v) for v, gone in zip(cells, missing)],
+                    dtype=object)
 
 
 def _shown(value):
@@ -43,13 +47,13 @@ def name_column(frame, column, strip=True):
     empty cell, or two spellings that differ only by spaces or Unicode encoding (:func:`.names.check_names`),
     is refused."""
     import pandas as pd
-    raw = frame[column]
-    texts = np.array([_text(v) for v in raw], dtype=object)
-    empty = np.array([not t.strip() for t in texts], dtype=bool)
+    texts = _texts(frame[column])
+    stripped = [t.strip() for t in texts]
+    empty = np.array([not t for t in stripped], dtype=bool)
     if empty.any():
         _fail(frame, empty, column, lambda i: "empty")
     check_names(list(texts), column, place(frame), row=lambda i: _row(frame, i))
-    return pd.Series([t.strip() for t in texts] if strip else list(texts), index=frame.index, dtype=str)
+    return pd.Series(stripped if strip else list(texts), index=frame.index, dtype=str)
 
 
 def _row(frame, i):
@@ -68,26 +72,28 @@ def number_column(frame, column, allow_empty=False, whole=False, low=None, high=
     """
     import pandas as pd
     raw = frame[column]
-    texts = np.array([_text(v).strip() for v in raw], dtype=object)
-    empty = texts == ""
-    values = pd.to_numeric(pd.Series(np.where(empty, None, texts), dtype=object), errors="coerce").to_numpy(float)
+    if raw.dtype.kind in "iuf":                               # numbers already (a table made in memory)
+        values, texts = raw.to_numpy(dtype=float), None
+        empty = np.isnan(values)
+    else:
+        texts = np.array([t.strip() for t in _texts(raw)], dtype=object)
+        empty = texts == ""
+        values = pd.to_numeric(np.where(empty, None, texts), errors="coerce").astype(float)
     if not allow_empty and empty.any():
         _fail(frame, empty, column, lambda i: "empty")
-    bad = ~empty & ~np.isfinite(values)
     kind = what or ("a whole number" if whole else "a finite number")
-    if bad.any():
-        _fail(frame, bad, column, lambda i: f"{_shown(raw.iloc[i])} is not {kind}")
-    checks = []
-    if whole:
-        checks.append(np.mod(np.nan_to_num(values), 1) != 0)
-    if low is not None:
-        checks.append(values < low)
-    if high is not None:
-        checks.append(values > high)
+    checks = [~empty & ~np.isfinite(values)]
+    with np.errstate(invalid="ignore"):
+        if whole:
+            checks.append(np.mod(np.nan_to_num(values), 1) != 0)
+        if low is not None:
+            checks.append(values < low)
+        if high is not None:
+            checks.append(values > high)
     for check in checks:
         if check.any():
             _fail(frame, check, column, lambda i: f"{_shown(raw.iloc[i])} is not {kind}")
-    if distinct:
+    if distinct and texts is not None:
         _check_distinct(frame, column, texts, values)
     return values
 
@@ -95,9 +101,9 @@ def number_column(frame, column, allow_empty=False, whole=False, low=None, high=
 def _check_distinct(frame, column, texts, values):
     """Refuse two cells whose numbers differ as written but not as doubles (more digits than a double holds)."""
     from decimal import Decimal, InvalidOperation
-    long = np.flatnonzero([len(t.lstrip("+-0").replace(".", "")) > 15 for t in texts])
+    long = {values[i] for i, t in enumerate(texts) if len(t.lstrip("+-0").replace(".", "")) > 15}
     seen = {}
-    for i in long:
+    for i in (i for i, v in enumerate(values) if v in long):
         try:
             exact = Decimal(texts[i])
         except InvalidOperation:

@@ -22,7 +22,7 @@ from pathlib import Path
 from ..atomic import atomic_path
 from .names import name_key
 
-__all__ = ["format_exact", "line_of", "place", "read_csv", "write_csv"]
+__all__ = ["Lines", "format_exact", "line_of", "place", "read_csv", "write_csv"]
 
 _DELIMITERS = {";": "';' (semicolon)", "\t": "a tab", "|": "'|'"}
 
@@ -40,27 +40,48 @@ def place(frame, label=None, column=None):
     return ", ".join(parts)
 
 
+class Lines:
+    """Each row's line in the file (``lines[label]``; ``np.asarray(lines)`` for all) and, for rows whose quoted
+    fields hold line breaks, how far below it each cell starts. Kept in ``frame.attrs["lines"]``: pandas copies
+    a table's attrs on every operation, and this copies nothing (one read's lines are one object)."""
+    __slots__ = ("array", "offsets")
+
+    def __init__(self, array, offsets):
+        self.array, self.offsets = array, offsets
+
+    def __getitem__(self, label):
+        return int(self.array[label])
+
+    def __array__(self, dtype=None, copy=None):
+        return self.array if dtype is None else self.array.astype(dtype)
+
+    def __len__(self):
+        return len(self.array)
+
+    def __deepcopy__(self, memo):
+        return self
+
+
 def line_of(frame, label, column=None):
     """The file's line that holds row ``label`` (its ``column``'s cell, in a row whose quoted fields
     span several lines) of a table read by :func:`read_csv`; None for a table made in memory."""
     lines = frame.attrs.get("lines")
     if lines is None:
         return None
-    line = int(lines[label])
-    offsets = frame.attrs.get("offsets", {})
-    return line + offsets.get((label, column), 0) if offsets else line
+    return lines[label] + lines.offsets.get((label, column), 0)
 
 
 def _open_rows(path):
-    """``(start line, fields, line offset of each field)`` for every non-blank record of the file."""
+    """``(start line, fields, line offset of each field or None)`` for every non-blank record of the file."""
     try:
         with open(path, newline="", encoding="utf-8-sig") as handle:
             reader = csv.reader(handle, strict=True)
             before = 0
             for fields in reader:
                 start, before = before + 1, reader.line_num
-                if fields and any(f.strip() for f in fields) or len(fields) > 1:
-                    yield start, fields, _offsets(fields)
+                if not fields or (len(fields) == 1 and not fields[0].strip()):
+                    continue                                         # a blank line
+                yield start, fields, _offsets(fields) if before > start else None
     except UnicodeDecodeError as err:
         raise ValueError(f"{path}: not a text file (it is not UTF-8: byte {err.start})") from None
     except csv.Error as err:
@@ -118,7 +139,7 @@ def read_csv(path, columns=None):
     """The table in the CSV file ``path``: a DataFrame of text exactly as written, NaN where a cell is
     empty, the header's names without surrounding spaces. ``columns``: names that must be present.
 
-    ``frame.attrs`` holds ``source`` (the path) and ``lines`` (a tuple: each row's line in the file) for
+    ``frame.attrs`` holds ``source`` (the path) and ``lines`` (:class:`Lines`: each row's line in the file) for
     :func:`place` and :func:`line_of`. A ValueError names the file (and the line) for an empty file,
     a header without rows, a repeated column name, another delimiter, a row with the wrong number of
     fields, a missing column, a malformed CSV or bytes that are not UTF-8.
@@ -141,14 +162,12 @@ def read_csv(path, columns=None):
                              f"{header}; expected {', '.join(columns)})")
     if not body:
         raise ValueError(f"{path}: no data rows after the header")
-    cells = {name: pd.Series([fields[j] for _, fields, _ in body], dtype=str).replace("", np.nan)
-             for j, name in enumerate(header)}
-    frame = pd.DataFrame(cells, columns=header)
-    frame.attrs["source"] = str(path)
-    frame.attrs["lines"] = tuple(line for line, _, _ in body)      # a tuple: pandas compares attrs when it joins
+    columns = zip(*(fields for _, fields, _ in body))
+    frame = pd.DataFrame({name: pd.Series(cells, dtype=str).replace("", np.nan) for name, cells in zip(header, columns)},
+                         columns=header)
     offsets = {(i, header[j]): o for i, (_, _, offs) in enumerate(body) if offs for j, o in enumerate(offs) if o}
-    if offsets:
-        frame.attrs["offsets"] = offsets
+    frame.attrs["source"] = str(path)
+    frame.attrs["lines"] = Lines(np.array([line for line, _, _ in body]), offsets)
     return frame
 
 

@@ -89,9 +89,9 @@ def read_recording(path, state_names, control_names=()):
     controls = np.stack([number_column(frame, c, True) for c in control_names], axis=1) if present else None
     line = np.asarray(frame.attrs["lines"])
     out = {"ids": [], "times": [], "states": [], "controls": [], "lines": []}
-    for ident in dict.fromkeys(ids):                       # in order of first appearance
-        rows = np.flatnonzero(ids == ident)
-        rows = rows[np.argsort(t[rows], kind="stable")]
+    codes, names = pd.factorize(ids)                       # in order of first appearance
+    order = np.lexsort((t, codes))                         # by demonstration, then by t (ties as in the file)
+    for ident, rows in zip(names, np.split(order, np.flatnonzero(np.diff(codes[order])) + 1)):
         if rows.size < 2:
             raise ValueError(f"{path}, line {line[rows[0]]}, column 'demo': demonstration {ident!r} has one row; "
                              "a demonstration needs at least two samples")
