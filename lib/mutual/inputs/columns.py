@@ -100,18 +100,17 @@ def number_column(frame, column, allow_empty=False, whole=False, low=None, high=
 
 def _check_distinct(frame, column, texts, values):
     """Refuse two cells whose numbers differ as written but not as doubles (more digits than a double holds)."""
-    from decimal import Decimal, InvalidOperation
-    long = {values[i] for i, t in enumerate(texts) if len(t.lstrip("+-0").replace(".", "")) > 15}
-    seen = {}
-    for i in (i for i, v in enumerate(values) if v in long):
-        try:
-            exact = Decimal(texts[i])
-        except InvalidOperation:
-            continue
-        first = seen.setdefault(values[i], (exact, i))
-        if first[0] != exact:
-            j = first[1]
-            raise ValueError(f"{place(frame, frame.index[i], column)}: {texts[i]} and {texts[j]} ({_row(frame, j)}) "
-                             f"differ only beyond the 15-17 significant digits of a double (both read as "
-                             f"{number_text(values[i])}), so no statistic can tell them apart; subtract a common "
-                             "offset from the column (or change its unit) and run again")
+    import pandas as pd
+    from decimal import Decimal
+    spelled = pd.DataFrame({"value": values, "text": texts}).drop_duplicates()
+    shared = spelled[spelled.duplicated("value", keep=False) & np.isfinite(spelled["value"])]
+    for value, group in shared.groupby("value", sort=False):
+        exact = {}
+        for i, text in zip(group.index, group["text"]):
+            exact.setdefault(Decimal(text), i)
+            if len(exact) > 1:
+                j = next(iter(exact.values()))
+                raise ValueError(f"{place(frame, frame.index[i], column)}: {texts[i]} and {texts[j]} "
+                                 f"({_row(frame, j)}) differ only beyond the 15-17 significant digits of a double "
+                                 f"(both read as {number_text(value)}), so no statistic can tell them apart; subtract "
+                                 "a common offset from the column (or change its unit) and run again")

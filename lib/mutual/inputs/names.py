@@ -26,10 +26,12 @@ def check_names(values, column, where, row=None):
     the header being line 1).
     """
     row = row or (lambda i: f"line {i + 2}")
-    seen = {}
+    first = {}
     for i, value in enumerate(values):
-        if not isinstance(value, str):
-            continue
+        if isinstance(value, str) and value not in first:
+            first[value] = i                                  # each spelling once: a column holds few names
+    seen = {}
+    for value, i in first.items():
         other = seen.setdefault(name_key(value), (value, i))
         if other[0] != value:
             raise ValueError(f"{where}: column {column!r}: {other[0]!r} ({row(other[1])}) and {value!r} ({row(i)}) "
