@@ -17,6 +17,7 @@ where they apply (:func:`place`).
 """
 
 import csv
+import io
 from pathlib import Path
 
 from ..atomic import atomic_path
@@ -71,19 +72,24 @@ def line_of(frame, label, column=None):
     return lines[label] + lines.offsets.get((label, column), 0)
 
 
-def _open_rows(path):
-    """``(start line, fields, line offset of each field or None)`` for every non-blank record of the file."""
+def _text(path):
+    """The file's text (a UTF-8 byte-order mark dropped), or a ValueError naming the file."""
     try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            reader = csv.reader(handle, strict=True)
-            before = 0
-            for fields in reader:
-                start, before = before + 1, reader.line_num
-                if not fields or (len(fields) == 1 and not fields[0].strip()):
-                    continue                                         # a blank line
-                yield start, fields, _offsets(fields) if before > start else None
+        return Path(path).read_bytes().decode("utf-8-sig")
     except UnicodeDecodeError as err:
         raise ValueError(f"{path}: not a text file (it is not UTF-8: byte {err.start})") from None
+
+
+def _quoted_records(path, text):
+    """``(start line, fields, line offset of each field or None)`` for every non-blank record of ``text``."""
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    before = 0
+    try:
+        for fields in reader:
+            start, before = before + 1, reader.line_num
+            if not fields or (len(fields) == 1 and not fields[0].strip()):
+                continue                                         # a blank line
+            yield start, fields, _offsets(fields) if before > start else None
     except csv.Error as err:
         raise ValueError(f"{path}, line {reader.line_num}: not a readable CSV file ({err}; a field that holds a "
                          "comma, a quote or a line break must be quoted, its quotes doubled)") from None
@@ -116,15 +122,14 @@ def _check_header(path, line, header):
         seen[key] = (position, name)
 
 
-def _check_widths(path, header, body):
-    """Refuse rows with more or fewer fields than the header, naming the line (trailing commas said as such)."""
-    n = len(header)
-    wrong = [(line, fields) for line, fields, _ in body if len(fields) != n]
+def _check_widths(path, n, wrong, rows):
+    """Refuse rows with more or fewer fields than the header's ``n``, naming the line (trailing commas said as
+    such); ``wrong``: ``(line, fields)`` of the rows of another width, ``rows``: how many rows there are."""
     if not wrong:
         return
     line, fields = wrong[0]
     if len(fields) > n and all(not f.strip() for f in fields[n:]):
-        if len(wrong) == len(body):
+        if len(wrong) == rows:
             raise ValueError(f"{path}, line {line}: every data row has more fields than the header ({len(fields)} "
                              f"against {n}): the rows end with a comma that the header does not; remove the "
                              "trailing commas (or name the extra column in the header)")
@@ -144,42 +149,85 @@ def read_csv(path, columns=None):
     a header without rows, a repeated column name, another delimiter, a row with the wrong number of
     fields, a missing column, a malformed CSV or bytes that are not UTF-8.
     """
+    path = Path(path)
+    text = _text(path)
+    plain = _plain(path, text, columns) if '"' not in text else None
+    return plain if plain is not None else _quoted(path, text, columns)
+
+
+def _header(path, line, header, columns):
+    """The header's names without their spaces, checked (repeated names, another delimiter, missing columns)."""
+    _check_header(path, line, header)
+    header = [name.strip() for name in header]
+    if "" in header:
+        raise ValueError(f"{path}, line {line}: column {header.index('') + 1} of the header has no name; name it "
+                         "(or remove the column)")
+    missing = [c for c in columns or () if c not in header]
+    if missing:
+        raise ValueError(f"{path}, line {line}: missing column {missing[0]!r} (the file has columns {header}; "
+                         f"expected {', '.join(columns)})")
+    return header
+
+
+def _plain(path, text, columns):
+    """A file without quotes, read by pandas' parser (fast): every line one record. None where the header ends
+    with a comma (read as a quoted file: :func:`_quoted` drops an unnamed empty last column)."""
     import numpy as np
     import pandas as pd
-    path = Path(path)
-    records = list(_open_rows(path))
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    kept = [(number, line) for number, line in enumerate(lines, start=1) if line.strip()]
+    if not kept:
+        raise ValueError(f"{path}: the file is empty (expected a header row and data rows)")
+    (header_line, head), body = kept[0], kept[1:]
+    if head.rstrip().endswith(","):
+        return None
+    header = _header(path, header_line, head.split(","), columns)
+    widths = np.array([line.count(",") for _, line in body], dtype=int) + 1
+    wrong = [(body[i][0], body[i][1].split(",")) for i in np.flatnonzero(widths != len(header))]
+    _check_widths(path, len(header), wrong, len(body))
+    if not body:
+        raise ValueError(f"{path}: no data rows after the header")
+    frame = pd.read_csv(io.StringIO("\n".join(line for _, line in body)), header=None, names=header, dtype=str,
+                        keep_default_na=False, na_values=[""], quoting=csv.QUOTE_NONE, index_col=False,
+                        skip_blank_lines=False)
+    return _located(frame, path, [number for number, _ in body], {})
+
+
+def _quoted(path, text, columns):
+    """A file with quoted fields, read record by record (a record may span lines)."""
+    import numpy as np
+    import pandas as pd
+    records = list(_quoted_records(path, text))
     if not records:
         raise ValueError(f"{path}: the file is empty (expected a header row and data rows)")
     (header_line, header, _), body = records[0], records[1:]
     _check_header(path, header_line, header)
-    header = [name.strip() for name in header]
-    header, body = _drop_unnamed_tail(path, header_line, header, body)
-    _check_widths(path, header, body)
-    if columns is not None:
-        missing = [c for c in columns if c not in header]
-        if missing:
-            raise ValueError(f"{path}, line {header_line}: missing column {missing[0]!r} (the file has columns "
-                             f"{header}; expected {', '.join(columns)})")
+    header, body = _drop_unnamed_tail([name.strip() for name in header], body)
+    header = _header(path, header_line, header, columns)
+    _check_widths(path, len(header), [(line, f) for line, f, _ in body if len(f) != len(header)], len(body))
     if not body:
         raise ValueError(f"{path}: no data rows after the header")
-    columns = zip(*(fields for _, fields, _ in body))
-    frame = pd.DataFrame({name: pd.Series(cells, dtype=str).replace("", np.nan) for name, cells in zip(header, columns)},
+    cells = zip(*(fields for _, fields, _ in body))
+    frame = pd.DataFrame({name: pd.Series(c, dtype=str).replace("", np.nan) for name, c in zip(header, cells)},
                          columns=header)
     offsets = {(i, header[j]): o for i, (_, _, offs) in enumerate(body) if offs for j, o in enumerate(offs) if o}
+    return _located(frame, path, [line for line, _, _ in body], offsets)
+
+
+def _located(frame, path, lines, offsets):
+    """``frame`` with its file and each row's line in ``attrs`` (:func:`place`, :func:`line_of`)."""
+    import numpy as np
     frame.attrs["source"] = str(path)
-    frame.attrs["lines"] = Lines(np.array([line for line, _, _ in body]), offsets)
+    frame.attrs["lines"] = Lines(np.array(lines), offsets)
     return frame
 
 
-def _drop_unnamed_tail(path, line, header, body):
+def _drop_unnamed_tail(header, body):
     """Columns at the end of the header with no name and no value in any row (a comma that ends every line)."""
     while header and header[-1] == "" and all(len(f) < len(header) or not f[len(header) - 1].strip()
                                                for _, f, _ in body):
         header = header[:-1]
         body = [(ln, f[:len(header)] if len(f) > len(header) else f, o) for ln, f, o in body]
-    if "" in header:
-        raise ValueError(f"{path}, line {line}: column {header.index('') + 1} of the header has no name; name it "
-                         "(or remove the column)")
     return header, body
 
 
