@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from mutual.inputs import name_column, number_column, place, read_csv
+from mutual.inputs import format_exact, name_column, number_column, place, read_csv
 
 ROOT = Path(__file__).resolve().parents[2]
 COMMITTED = sorted((ROOT / "data").rglob("*.csv"))
@@ -164,3 +164,8 @@ def test_numbers_beyond_a_doubles_digits_are_refused_with_that_reason(tmp_path):
         number_column(frame, "y", distinct=True)
     path.write_text("id,y\na,0.100000000000000000000\nb,0.1\nc,1e-1\n")          # one number, written three ways
     assert number_column(read_csv(path), "y", distinct=True).tolist() == [0.1, 0.1, 0.1]
+
+
+def test_whole_numbers_are_written_in_their_short_form():
+    assert [format_exact(v) for v in (15.0, -3.0, 1e16, 0.5, -0.0)] == ["15", "-3", "1e+16", "0.5", "-0.0"]
+    assert all(float(format_exact(v)) == v for v in (0.1, 1 / 3, 2.0 ** 53 + 2, 5e-324, 1.7976931348623157e308))
