@@ -53,7 +53,7 @@ def test_lemma_321_holds_on_deterministic_dynamics():
 
 
 def test_lemma_321_fails_on_the_exact_likelihood_with_slip():
-    """The reading of issue 20: cell (2, 6) of the chapter 3 experiment loses about 7e-5 nats per demonstration."""
+    """The reading of issue 20 on the earlier three-truth layout: cell (2, 6) loses about 7e-5 nats per demonstration."""
     first = chapter3("first")
     demos = sample_demonstrations(first.grid.mdp, 100, first.truth, rng=0)
     row = lemma_321_exact(first.grid.mdp, demos, states=[first.grid.state(2, 6)]).iloc[0]
@@ -77,7 +77,9 @@ def test_algorithm_3_and_1_counted_work():
 def test_the_scan_keeps_the_chosen_set_up():
     assert scan.CHOSEN.setup().grid.mdp.horizon == chapter3().grid.mdp.horizon == 18
     assert scaled_cell((4, 0), 9) == (4, 0) and scaled_cell((2, 6), 11) == (3, 8) and scaled_cell((6, 5), 7) == (5, 4)
-    assert len(scan.full_scan()) == 60 and scan.CHOSEN in scan.full_scan() and len(scan.axes_scan()) == 10
+    cells = scan.grid_scan()
+    assert len(cells) == 12 * 8 * 4 * 4 == len(set(cells)) and scan.CHOSEN in cells and len(scan.axes_scan()) == 25
+    assert set(scan.axes_scan()) <= set(cells)
     hot = scan.Setting(2.0).setup().grid.mdp
     np.testing.assert_allclose(hot.reward, 2 * chapter3().grid.mdp.reward)
 
@@ -89,14 +91,20 @@ def test_the_scan_statements_use_the_claims_rules():
     assert float(claims.loc["c3-f-retracts", "thesis_value"]) == scan.F_RETRACTS
     assert claims.loc["c3-f-retracts", "compare"] == f"abs:{scan.F_RETRACTS_TOL}"
     assert float(claims.loc["c3-gain-order-of-magnitude", "thesis_value"]) == scan.GAIN_DROP
-    assert set(scan.STATEMENTS) <= set(claims.index)
+    assert set(scan.STATEMENTS) | {scan.BLINDSPOT_STATEMENT[0]} <= set(claims.index)
+    assert all(claims.loc[c, "basis"] == "computed" for c in scan.STATEMENTS)
 
 
 def test_scan_summary_counts_seeds_and_cells():
-    rows = [{"reward scale": b, "horizon": 18, "width": 9, "seed": s, "gain drop": 20.0 if (b == 1.0 or s < 5) else 2.0}
-            for b in (1.0, 2.0) for s in range(10)]
-    out = scan.scan_summary(pd.DataFrame(rows), scan.STATEMENTS["c3-gain-order-of-magnitude"], table_name="t")
-    assert out["seeds"] == [10, 10] and out["settings"] == [1, 2] and "scale 2" in out["flips"]
+    rows = [{"layout": "four", "reward scale": b, "horizon": 18, "width": 9, "seed": s,
+             "gain drop": 20.0 if (b == 1.0 or s < 1) else 2.0} for b in (1.0, 2.0) for s in range(3)]
+    chosen = [{"layout": "four", "reward scale": 1.0, "horizon": 18, "width": 9, "seed": s,
+               "gain drop": 20.0 if s != 4 else 2.0} for s in range(10)]
+    out = scan.scan_summary(pd.DataFrame(rows), scan.STATEMENTS["c3-gain-order-of-magnitude"], pd.DataFrame(chosen),
+                            table_name="t")
+    assert out["seeds"] == [9, 10] and out["settings"] == [1, 2] and "scale 2" in out["flips"] and out["table"] == "t"
+    with pytest.raises(ValueError, match="chosen"):
+        scan.scan_summary(pd.DataFrame(rows), scan.STATEMENTS["c3-gain-order-of-magnitude"], pd.DataFrame(rows[3:]))
 
 
 def test_until_stops_greedy_early_with_the_same_choices():

@@ -1,0 +1,62 @@
+"""Chapter 3's scan (mutual.constraints.scan, .joint): each run's numbers against the one-run greedy's own summary,
+the distance from the thesis by hand, the refinement's cells, and the demonstrator's saturation measures."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from mutual.constraints import joint, scan
+from mutual.constraints.candidates import constraint_candidates
+from mutual.constraints.demonstrations import sample_demonstrations
+from mutual.constraints.inference import greedy_inference
+from mutual.constraints.layouts import layout_family
+
+
+def test_a_runs_numbers_match_the_one_run_greedy():
+    setting = scan.Setting(2.0, 2.0, 7, layout_family()[0])
+    row = scan.world_rows([setting], [0], n_demos=60)[0]
+    setup = setting.setup()
+    demos = sample_demonstrations(setup.grid.mdp, 60, setup.truth, rng=0)
+    cand = constraint_candidates(setup.grid.mdp, demos)
+    result = greedy_inference(setup.grid.mdp, demos, cand, len(row["chosen"].split("; ")))
+    relevant, upper, truth = setup.candidate_ids(cand)
+    summary = result.summary(relevant, truth)
+    assert row["chosen"] == "; ".join(setup.grid.label(cand.kind[k], cand.index[k]) for k in result.chosen)
+    assert row["recovered at"] == summary["recovered_at"] and row["next untrue"] == summary["next_untrue"]
+    assert row["F next"] == pytest.approx(summary["F_next"], abs=1e-12)
+    assert row["gain drop"] == pytest.approx(summary["gain_drop"], rel=1e-9)
+    assert row["F bottom-middle"] == pytest.approx(np.exp(result.log_f[0][relevant[0]]), abs=1e-12)
+    assert row["first is bottom-middle"] == (result.chosen[0] == relevant[0])
+    assert row["upper feasible"] == sum(np.isfinite(result.gain[0][k]) for k in upper)
+    rejects = (cand.kind == "state") & ~np.isfinite(result.gain[0]) & (cand.psi < 1)
+    assert row["psi* rejects"] == int(rejects.sum())
+    untrue = next((i + 1 for i, k in enumerate(result.chosen) if k not in truth), None)
+    assert row["first untrue at"] == untrue
+
+
+def test_the_distance_counts_tolerances_by_hand():
+    row = {"F bottom-middle": 0.39, "F first untrue": 0.99, "first untrue at": 3, "recovered at": None}
+    terms = joint.distance_terms(row, rounds=8)
+    assert terms == pytest.approx({"F bottom-middle": 2.0, "F retraction": 1.0, "retraction round": 2, "recovery round": 5})
+    perfect = {"F bottom-middle": 0.29, "F first untrue": 0.96, "first untrue at": 5, "recovered at": 4}
+    assert joint.distance(perfect) == pytest.approx(0, abs=1e-12)
+    assert joint.distance({**perfect, "F bottom-middle": np.nan}) == pytest.approx(0.71 / 0.05)
+
+
+def test_ranking_and_refinement():
+    rows = [{"layout": "four", "reward scale": b, "horizon": 18, "width": 9, "seed": s, "at goal": 1.0,
+             "F bottom-middle": f, "F first untrue": 0.96, "first untrue at": 5, "recovered at": 4}
+            for b, f in ((1.0, 0.5), (4.0, 0.3)) for s in range(2)]
+    ranked = joint.rank_setups(pd.DataFrame(rows))
+    assert list(ranked["reward scale"]) == [4.0, 1.0] and ranked["distance"].iloc[0] == pytest.approx(0.2)
+    cells = joint.refinement(ranked, layout_family(), top=1)
+    assert [round(c.reward_scale, 6) for c in cells] == [round(4 / 2 ** 0.5, 6), 4.0, round(4 * 2 ** 0.5, 6)]
+    assert all(c.horizon == 18 and c.width == 9 and c.layout.name == "four" for c in cells)
+    assert joint.best_setup(ranked)["reward scale"] == 4.0
+
+
+def test_the_demonstrator_saturates_as_it_cools():
+    table = joint.saturation_table(layout_family()[0], (1.0, 8.0, 16.0), (2.0,), (7,))
+    moves = table["moves"].to_numpy()
+    assert moves[0] > moves[1] >= 6 and table["moves change"].iloc[1] < 0.01 < table["moves change"].iloc[0]
+    assert table["entropy per move"].is_monotonic_decreasing and table["at goal"].between(0, 1).all()
