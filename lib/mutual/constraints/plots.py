@@ -170,7 +170,7 @@ def inference_panels_into(fig, grid, candidates, result, rounds, truth_states=()
         if j:
             axes[0, j].set_ylabel("")
     if im is not None:
-        label = "F = Z$_{C+}$/Z$_{C0}$" if scale == "F" else f"-log F (floor {GAIN_FLOOR:g})"
+        label = "F = Z$_{C+}$/Z$_{C0}$" if scale == "F" else "-log F"
         fig.colorbar(im, ax=axes[0, :].tolist(), shrink=0.8, label=label + "; grey: infeasible or chosen")
     return fig
 
