@@ -6,6 +6,8 @@ constraint", an untrue one (Figure 3.3). :func:`distance` measures how far one r
 units of each number's tolerance (the claims' own: 0.05 on F = 0.29, 0.03 on F = 0.96, one round on each
 round); :func:`rank_setups` ranks the scan's cells by their mean over seeds, :func:`refinement` puts a finer
 grid of reward scales around the best ones, and :func:`best_setup` reports the closest.
+:func:`calibrated_settings` is the second search, added after the first had run: at each layout, horizon
+and width, the reward scale at which F of the bottom-middle cell in round 1 is 0.29 (:func:`calibrated_scale`).
 
 :func:`saturation_table` measures the demonstrator itself (no inference) at every world of the scan: its
 expected number of moves before it reaches the goal, the share of its trajectories that end at the goal,
@@ -16,7 +18,10 @@ and its entropy per move. The reward scale's range ends one doubling past where 
 import numpy as np
 import pandas as pd
 
-from .backup import state_action_visitation
+from .backup import log_partition, state_action_visitation
+from .chance import constraint_mask
+from .gridworld import GRID_ACTIONS
+from .layouts import CHOSEN_LAYOUT
 from .mdp import _transpose_times, soft_policy
 from .scan import CELL, F_BOTTOM_MIDDLE, F_BOTTOM_MIDDLE_TOL, F_RETRACTS, F_RETRACTS_TOL, RECOVERY_ROUND, \
     RETRACTION_ROUND, ROUNDS, Setting
@@ -101,3 +106,34 @@ def saturation_table(layout, scales, factors, widths):
     table = pd.DataFrame(rows)
     nxt = table.groupby(["width", "horizon"])["moves"].shift(-1)
     return table.assign(**{"moves change": (nxt - table["moves"]).abs() / table["moves"]})
+
+
+def bottom_middle_f(reward_scale, horizon_factor, width):
+    """F of the bottom-middle cell's constraint for the unconstrained agent (round 1, eq. 2.25), at the threshold a
+    demonstration standing beside it on the bottom row gives it (eq. 3.3: the largest chance that a move other than
+    the one into it slips there). The ground truth does not enter: C0 is unconstrained."""
+    setup = Setting(reward_scale, horizon_factor, width, CHOSEN_LAYOUT).setup()
+    m, g, bm = setup.grid.mdp, setup.grid, setup.bottom_middle
+    beside = g.state(*(g.coords(bm)[0] - 1, 0))
+    psi = float(np.delete(m.dense_transitions()[beside, :, bm], GRID_ACTIONS.index("E")).max())
+    V = log_partition(m, np.stack([constraint_mask(m), constraint_mask(m, [bm], psi)], axis=2))[g.state(*g.start)]
+    return float(np.exp(V[1] - V[0]))
+
+
+def calibrated_scale(horizon_factor, width, target=F_BOTTOM_MIDDLE, low=0.125, high=16.0, steps=40):
+    """The reward scale in [``low``, ``high``] at which :func:`bottom_middle_f` equals ``target``, by bisection on its
+    logarithm (F falls as the scale grows); ``low`` or ``high`` when the target lies outside."""
+    f = lambda b: bottom_middle_f(b, horizon_factor, width) - target          # noqa: E731
+    if f(low) <= 0 or f(high) >= 0:
+        return low if f(low) <= 0 else high
+    a, b = np.log(low), np.log(high)
+    for _ in range(steps):
+        mid = (a + b) / 2
+        a, b = (mid, b) if f(np.exp(mid)) > 0 else (a, mid)
+    return float(np.exp((a + b) / 2))
+
+
+def calibrated_settings(layouts, factors, widths):
+    """Every layout x horizon factor x width at its :func:`calibrated_scale` (the second, post-hoc search)."""
+    scales = {(f, w): calibrated_scale(f, w) for f in factors for w in widths}
+    return [Setting(scales[f, w], f, w, lay) for w in widths for f in factors for lay in layouts]
