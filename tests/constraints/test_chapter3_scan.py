@@ -60,3 +60,14 @@ def test_the_demonstrator_saturates_as_it_cools():
     moves = table["moves"].to_numpy()
     assert moves[0] > moves[1] >= 6 and table["moves change"].iloc[1] < 0.01 < table["moves change"].iloc[0]
     assert table["entropy per move"].is_monotonic_decreasing and table["at goal"].between(0, 1).all()
+
+
+def test_the_calibrated_scale_gives_the_thesis_f_for_the_bottom_middle_cell():
+    scale = joint.calibrated_scale(2.0, 9)
+    assert joint.bottom_middle_f(scale, 2.0, 9) == pytest.approx(scan.F_BOTTOM_MIDDLE, abs=1e-6)
+    assert joint.bottom_middle_f(scale / 2, 2.0, 9) > scan.F_BOTTOM_MIDDLE > joint.bottom_middle_f(scale * 2, 2.0, 9)
+    # the same F as greedy inference's round 1 on demonstrations that stand beside the cell
+    setting = scan.Setting(scale, 2.0, 9, layout_family()[0])
+    row = scan.world_rows([setting], [0])[0]
+    assert row["F bottom-middle"] == pytest.approx(scan.F_BOTTOM_MIDDLE, abs=1e-6)
+    assert joint.calibrated_scale(2.0, 9, target=0.999) == 0.125
