@@ -79,7 +79,7 @@ def _face_of(module):
 
 def test_the_thrusts_and_the_machinery_are_subpackages():
     packages = sorted(p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists())
-    assert packages == sorted(ALGORITHMS + ("compendium", "cli"))
+    assert packages == sorted(ALGORITHMS + ("compendium", "cli", "inputs"))
 
 
 @pytest.mark.parametrize("name", [n for n in GRAPH if n.split(".")[1:2] and n.split(".")[1] in ALGORITHMS])

@@ -71,7 +71,7 @@ CASES = [
      ["constraints", "infer", "demos.csv", "--world", "w.toml"], ["demos.csv", "missing column 'state'"]),
     ({"demos.csv": SMALL_DEMOS.replace("0,1,1,0", "0,1,1.5,0"), "w.toml": SMALL_WORLD},
      ["constraints", "infer", "demos.csv", "--world", "w.toml"], ["demos.csv", "column 'state'", "line 3",
-                                                                   "1.5 is not a whole number"]),
+                                                                   "'1.5' is not an integer"]),
     ({"demos.csv": SMALL_DEMOS.replace("0,1,1,0", "0,1,1,"), "w.toml": SMALL_WORLD},
      ["constraints", "infer", "demos.csv", "--world", "w.toml"], ["demos.csv", "column 'action'", "line 3"]),
     ({"demos.csv": SMALL_DEMOS.replace("0,1,1,0", "0,1,1,99"), "w.toml": SMALL_WORLD},

@@ -16,7 +16,7 @@ from scipy import stats
 from statsmodels.stats.anova import AnovaRM
 
 from mutual.cli import main
-from mutual.csvfile import read_text_csv
+from mutual.inputs import read_csv as read_text_csv
 
 from helpers.cli import EXAMPLES, MALFORMED, assert_one_line_error, mutual, no_temporaries
 
@@ -89,7 +89,7 @@ CASES = [
     ({"data.csv": b"\xff\xfe\x00w\x00h\x00o"}, ANOVA_ARGS, ["data.csv"]),
     ({"data.csv": STUDY_TEXT.replace("y\n", "score\n", 1)}, ANOVA_ARGS, ["data.csv", "missing column 'y'"]),
     ({"data.csv": STUDY_TEXT.replace("s2,b,4", "s2,b,four")}, ANOVA_ARGS, ["data.csv", "column 'y'", "line 5", "'four'"]),
-    ({"data.csv": STUDY_TEXT.replace("s2,b,4", "s2,b,")}, ANOVA_ARGS, ["column 'y'", "line 5", "missing"]),
+    ({"data.csv": STUDY_TEXT.replace("s2,b,4", "s2,b,")}, ANOVA_ARGS, ["column 'y'", "line 5", "empty"]),
     ({"data.csv": STUDY_TEXT.replace("s3,a,3", ",a,3")}, ANOVA_ARGS, ["column 'who'", "line 6", "empty"]),
     ({"data.csv": STUDY_TEXT + "s3,b,4\n"}, ANOVA_ARGS, ["data.csv", "('s3', 'b')", "--aggregate mean"]),
     ({"data.csv": STUDY_TEXT.replace("s3,b,3.5\n", "")}, ANOVA_ARGS, ["data.csv", "unbalanced design", "s3"]),

@@ -62,7 +62,7 @@ def test_supervisor_fit_closed_form_recovers_the_example_supervisors(tmp_path):
 
 def test_supervisor_fit_on_a_malformed_file(tmp_path):
     run = mutual("supervisor", "fit", MALFORMED / "interventions_bad_theta.csv", "--grid", "quick", cwd=tmp_path)
-    assert_one_line_error(run, "interventions_bad_theta.csv", "column 'theta'", "line 5 of the file", "'left'")
+    assert_one_line_error(run, "interventions_bad_theta.csv", "line 5, column 'theta'", "'left'")
 
 
 INTERVENTIONS = (EXAMPLES / "interventions.csv").read_text() if (EXAMPLES / "interventions.csv").exists() else ""

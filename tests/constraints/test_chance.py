@@ -112,7 +112,7 @@ def test_lemma_321_holds_on_deterministic_dynamics():
 
 def test_lemma_321_fails_on_the_exact_likelihood_with_slip():
     """With slip, Lemma 3.2.1's data-allowed threshold is not the exact likelihood's maximiser: cell (2, 6) of the
-    chapter 3 experiment loses about 7e-5 nats per demonstration."""
+    chapter 3 experiment (its earlier three-truth layout) loses about 7e-5 nats per demonstration."""
     first = chapter3("first")
     demos = sample_demonstrations(first.grid.mdp, 100, first.truth, rng=0)
     row = lemma_321_exact(first.grid.mdp, demos, states=[first.grid.state(2, 6)]).iloc[0]

@@ -40,7 +40,7 @@ def test_demonstrations_csv_round_trip(tmp_path):
 @pytest.mark.parametrize("edit, message", [
     (lambda df: df.assign(state=df["state"].where(df.index != 3, 99)), "unknown state"),
     (lambda df: df.assign(action=df["action"].where(df.index != 2, 12)), "unknown action"),
-    (lambda df: df.drop(columns="action"), "missing columns"),
+    (lambda df: df.drop(columns="action"), "missing column 'action'"),
     (lambda df: df.assign(t=df["t"].where(df.index != 2, 7)), "t must run"),
 ])
 def test_loader_rejects_bad_files(tmp_path, edit, message):
@@ -140,8 +140,8 @@ CASES = [
     (sample_demonstrations, (MDP0, 3, constraint_mask(MDP0, [5], 0.0)), {}, ValueError, "no trajectory"),
     # the demonstrations CSV: file, line and column
     (_empty_file, (), {}, ValueError, "is empty"),
-    (_load_edited, (lambda lines: lines[:1],), {}, ValueError, "no rows"),
-    (_load_edited, (lambda lines: [line.rsplit(",", 1)[0] for line in lines],), {}, ValueError, "missing columns"),
+    (_load_edited, (lambda lines: lines[:1],), {}, ValueError, "no data rows"),
+    (_load_edited, (lambda lines: [line.rsplit(",", 1)[0] for line in lines],), {}, ValueError, "missing column 'action'"),
     (_load_edited, (_replace(4, "action", "north"),), {}, ValueError, "line 4, column 'action'"),
     (_load_edited, (_replace(10, "action", "99"),), {}, ValueError, "last row"),
     (_load_edited, (_replace(5, "state", "2.5"),), {}, ValueError, "line 5, column 'state'"),

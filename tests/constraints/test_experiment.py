@@ -1,4 +1,4 @@
-"""Chapter 3's set-up: the layouts are fixed and the first one is the result's; bad layouts are named."""
+"""Chapter 3's set-up: the layouts are fixed and layout four is the result's; bad layouts are named."""
 
 import pytest
 
@@ -6,14 +6,16 @@ from mutual.constraints.experiment import LAYOUTS, chapter3
 from mutual.constraints.gridworld import GRID_ACTIONS
 
 
-def test_layouts_are_fixed_and_the_first_one_is_the_result():
-    first, second = chapter3("first"), chapter3("second")
-    assert LAYOUTS["first"] == ((2, 6), (4, 7), (6, 5)) and LAYOUTS["second"] == ((2, 6), (4, 7), (6, 6))
+def test_layouts_are_fixed_and_layout_four_is_the_result():
+    four, first, second = chapter3(), chapter3("first"), chapter3("second")
+    assert four.layout is LAYOUTS["four"] and four.layout.task_relevant == 4 and first.layout.task_relevant == 3
+    assert [GRID_ACTIONS[a] for a in four.actions] == ["NW", "W", "SW"] and four.upper == first.upper
+    assert LAYOUTS["first"].upper == ((2, 6), (4, 7), (6, 5)) and LAYOUTS["second"].upper == ((2, 6), (4, 7), (6, 6))
     assert first.grid.coords(first.bottom_middle) == (4, 0)
     north = GRID_ACTIONS.index("N")
     assert not first.truth[first.grid.state(6, 4), north] and first.truth[first.grid.state(6, 5), north]
     assert second.truth[second.grid.state(6, 4), north] and not second.truth[second.grid.state(6, 5), north]
-    assert "first layout" in repr(first) and len(repr(first)) < 300
+    assert "layout four" in repr(four) and "layout first" in repr(first) and len(repr(four)) < 300
 
 
 CASES = [

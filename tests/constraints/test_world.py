@@ -45,7 +45,7 @@ BAD = [
     (world_with(slip="0.1"), "key 'slip'"),
     (world_with(horizon=0), "key 'horizon': must be an integer >= 1"),
     (world_with(horizon=10.5), "key 'horizon'"),
-    (world_with(miss_penalty=-50), "key 'miss_penalty': must be a number >= 0"),
+    (world_with(miss_penalty=-50), "key 'miss_penalty': must be a non-negative finite number"),
     (world_with(miss_penalty=float("inf")), "key 'miss_penalty'"),
     (world_with(loiter="never"), "key 'loiter': must be one of ['goal', 'anywhere']"),
     (world_with(loiter=1), "key 'loiter'"),

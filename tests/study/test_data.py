@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from mutual.csvfile import format_exact
+from mutual.inputs import format_exact
 from mutual.study.data import illustrative_questionnaire, read_table, validate_trials, write_table
 from mutual.study.stats import rm_anova
 
@@ -24,8 +24,8 @@ def test_study_table_round_trip(tmp_path, questionnaire):
 
 
 @pytest.mark.parametrize("corrupt, message", [
-    (lambda d: d.drop(columns="trial"), r"missing column\(s\) \[.trial.\]"),
-    (lambda d: d.assign(value=d["value"].where(d.index != 7)), "row 7, column 'value': missing value"),
+    (lambda d: d.drop(columns="trial"), "missing column 'trial'"),
+    (lambda d: d.assign(value=d["value"].where(d.index != 7)), "row 7, column 'value': empty"),
     (lambda d: pd.concat([d, d.iloc[[4]]]), "duplicate"),
     (lambda d: d.assign(value=d["value"].where(d.index != 2, 9)), "Likert"),
     (lambda d: d.assign(treatment=d["treatment"].where(d.index != 0, "Reckless")), "does not name this row's treatment"),
@@ -108,8 +108,8 @@ IV_HEADER = "participant,trial,time,x,y,theta\n"
 CASES = [
     # --- loaders: the file, the line and the column
     (read_table, (File(""),), {}, ValueError, "data.csv: the file is empty"),
-    (read_table, (File(HEADER),), {}, ValueError, "has a header but no data rows"),
-    (read_table, (File(TRIALS_OK.replace(",value", ",score")),), {}, ValueError, "missing column(s) ['value']"),
+    (read_table, (File(HEADER),), {}, ValueError, "data.csv: no data rows after the header"),
+    (read_table, (File(TRIALS_OK.replace(",value", ",score")),), {}, ValueError, "data.csv: missing column 'value'"),
     (read_table, (File(TRIALS_OK + ROW.format(measure="trust", value="lots").replace(",1,1,", ",2,2,")),), {},
      ValueError, "data.csv, line 3, column 'value': 'lots' is not a number"),
     (read_table, (File(TRIALS_OK.replace(",1,Standard,", ",3,Standard,")),), {}, ValueError,
@@ -119,13 +119,13 @@ CASES = [
      "line 2, column 'value': 9 is not a Likert answer"),
     (read_table, (File(TRIALS_OK + ROW.format(measure="collisions", value=-1)),), {}, ValueError,
      "line 3, column 'value': -1 is not a count"),
-    (read_table, (File(TRIALS_OK.replace(",3\n", ",\n")),), {}, ValueError, "line 2, column 'value': missing value"),
+    (read_table, (File(TRIALS_OK.replace(",3\n", ",\n")),), {}, ValueError, "line 2, column 'value': empty"),
     (read_table, (File(TRIALS_OK + TRIALS_OK[len(HEADER):]),), {}, ValueError, "line 3: duplicate row"),
     (read_table, (File(TRIALS_OK.replace("Standard-Learned", "Learned-Conservative")),), {}, ValueError,
      "line 2, column 'comparison': 'Learned-Conservative' does not name this row's treatment 'Standard'"),
     (read_table, (File(TRIALS_OK),), {"treatments": ("A", "B")}, ValueError, "line 2, column 'treatment': unknown treatment"),
-    (read_table, (File(TRIALS_OK + "P01,Standard-Learned,1,Standard,1\n"),), {}, ValueError, "line 3, column 'trial': missing value"),
-    (read_table, (File('a,b\n1,"unclosed\n'),), {}, ValueError, "not a well-formed CSV file"),
+    (read_table, (File(TRIALS_OK + "P01,Standard-Learned,1,Standard,1\n"),), {}, ValueError, "line 3: the row has 5 fields, the header 8"),
+    (read_table, (File('a,b\n1,"unclosed\n'),), {}, ValueError, "not a readable CSV file"),
     (read_table, (File(TRIALS_OK),), {"kind": "survey"}, ValueError, "kind must be one of"),
     (read_table, (File(TRIALS_OK),), {"treatments": "Standard"}, ValueError, "treatments must be a list of names"),
     (illustrative_questionnaire, (pd.DataFrame({"participant": [1]}),), {}, ValueError, "design must be a DataFrame with columns"),
@@ -134,7 +134,7 @@ CASES = [
     (read_table, (File(LONG),), {"kind": "long", "dv": "score", "within": "cond", "subject": "subj"}, ValueError,
      "line 4, column 'score': 'x' is not a number"),
     (read_table, (File(LONG),), {"kind": "long", "dv": "rating", "within": "cond", "subject": "subj"}, ValueError,
-     "missing column(s) ['rating']"),
+     "missing column 'rating'"),
     (read_table, (File(IV_HEADER + "P01,0,1.5,1,2,0\nP01,1,2.0,west,2,0\n"),), {"kind": "interventions"}, ValueError,
      "line 3, column 'x': 'west' is not a finite number"),
     (read_table, (File(IV_HEADER + "P01,0,-1,1,2,0\n"),), {"kind": "interventions"}, ValueError,
@@ -142,7 +142,7 @@ CASES = [
     (read_table, ("/nonexistent/study.csv",), {}, FileNotFoundError, "no such file"),
     (read_table, (42,), {}, ValueError, "path must be a file path"),
     (write_table, (pd.DataFrame({"participant": ["P1"]}), "/tmp/never-written.csv"), {}, ValueError,
-     "trials table: missing column(s)"),
+     "trials table: missing column 'comparison'"),
     (validate_trials, (pd.DataFrame({c: [1] for c in HEADER.strip().split(",")}),), {"treatments": ("x",)},
      ValueError, "trial table, row 0, column 'treatment': unknown treatment '1'"),
 ]

@@ -47,12 +47,12 @@ def test_misalignment_view_follows_the_level():
 
 CASES = [
     # --- the Explore views
-    (explore.cohort_view, (), {"n_standard": -1}, ValueError, "n_standard must be a whole number in 0..50"),
+    (explore.cohort_view, (), {"n_standard": -1}, ValueError, "n_standard must be an integer in 0..50"),
     (explore.cohort_view, (), {"n_standard": 1, "n_conservative": 0, "n_gradual": 0, "n_agile": 0}, ValueError,
      "at least 2 recruits"),
-    (explore.cohort_view, (), {"noise": float("nan")}, ValueError, "noise must be a number in [0.0, 1.0]"),
+    (explore.cohort_view, (), {"noise": float("nan")}, ValueError, "noise must be a finite number in [0, 1]"),
     (explore.misalignment_view, (), {"w_supervisor": 0.9}, ValueError, "w_supervisor must be one of the library's"),
-    (explore.misalignment_view, (), {"k": 10}, ValueError, "k must be a number in [-3.0, 5.0]"),
+    (explore.misalignment_view, (), {"k": 10}, ValueError, "k must be a number in [-3, 5]"),
 ]
 
 

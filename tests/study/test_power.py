@@ -310,7 +310,7 @@ CASES = [
     (pw.effect_size_from_f, (-1.0, 2, 20), {}, "F must be a non-negative number"),
     (pw.effect_size_from_f, (8.72, 2, 21), {}, "not a one-way repeated-measures design"),
     (pw.effect_size_from_f, (8.72, 2, 2), {}, "df2 must exceed 2"),
-    (pw.effect_size_from_f, (8.72, 0, 20), {}, "df_num must be a positive whole number"),
+    (pw.effect_size_from_f, (8.72, 0, 20), {}, "df_num must be an integer >= 1"),
     (pw.effect_size_from_f, (8.72, 2, 20), dict(confidence=1.0), "confidence must lie strictly between 0 and 1"),
     (pw.noncentrality_interval, (np.nan, 2, 20), {}, "F must be a non-negative number"),
     (pw.unbiased_noncentrality, (5.0, 2, 2), {}, "df2 must exceed 2"),

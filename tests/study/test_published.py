@@ -58,7 +58,7 @@ CASES = [
     (recover_from_summary, ({"S": 5.0, "L": 5.0, "C": 5.0}, 8.72, 2, 20), {}, DegenerateDataError, "all means are equal"),
     (f_p_value, (float("nan"), 2, 20), {}, ValueError, "F must be a finite number"),
     (f_p_value, (-1.0, 2, 20), {}, ValueError, "need F >= 0"),
-    (design_from_f_dofs, (0, 20), {}, ValueError, "df_num must be a positive whole number"),
+    (design_from_f_dofs, (0, 20), {}, ValueError, "df_num must be an integer >= 1"),
     (design_from_f_dofs, (2, 21), {}, ValueError, "not a one-way repeated-measures design"),
     (recover_from_summary, (means3, 0.0, 2, 20), {}, ValueError, "F must be a positive finite number"),
     (recover_from_summary, ({"S": 1.0, "L": 2.0}, 8.72, 2, 20), {}, ValueError, "implies 3 levels, got 2 means"),

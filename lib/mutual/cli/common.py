@@ -7,10 +7,13 @@ Only the standard library is imported at module level, so that ``mutual --help``
 numpy, pandas and matplotlib are imported inside the functions that need them.
 """
 
+import argparse
 import json
 import math
 import os
+import re
 import sys
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -27,6 +30,26 @@ class OutputError(Exception):
     """The outputs could not be written (a full disk, say); nothing was left in --out: one line, exit status 1."""
 
 
+#: an option value that starts with '-' but is a number or a list of numbers: -1, -0.5, -1e-3, -inf, -1,1
+_NEGATIVE_VALUE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,.*)?$|^-(inf|infinity|nan)(,.*)?$", re.I)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse's parser for every ``mutual`` command: an option's value that starts with '-' and reads as a
+    number or a comma-separated list of numbers (``--w-max -1,1``, ``--rho -0.5``) is a value, not an option;
+    for any other value that starts with '-' the error says to write ``--option=VALUE``."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_VALUE
+
+    def error(self, message):
+        option = re.match(r"argument (--[\w-]+)(/-\w)?: expected one argument", message)
+        if option:
+            message += f" (a value that starts with '-' is written {option.group(1)}=VALUE)"
+        super().error(message)
+
+
 def command_group(subparsers, name, help, description):
     """Add the group ``mutual NAME`` and return its commands (one of which must be given)."""
     group = subparsers.add_parser(name, help=help, description=description)
@@ -35,7 +58,6 @@ def command_group(subparsers, name, help, description):
 
 def add_command(commands, name, help, description, example):
     """Add a command to a group: ``description`` and ``example`` shown in ``--help`` as they are written."""
-    import argparse
     return commands.add_parser(name, help=help, description=description, epilog=example,
                                formatter_class=argparse.RawDescriptionHelpFormatter)
 
@@ -72,73 +94,33 @@ def existing_file(path):
 
 @contextmanager
 def about(path):
-    """Turn a ValueError (or a parse error) raised while reading or analysing ``path`` into an
+    """Turn a ValueError (or a KeyError, TypeError) raised while reading or analysing ``path`` into an
     :class:`InputError` whose message starts with the file name."""
-    import pandas as pd
     try:
         yield
     except (InputError, budget.TooLarge):
         raise
-    except pd.errors.EmptyDataError:
-        raise InputError(f"{path}: the file is empty (expected a header row and data rows)") from None
-    except pd.errors.ParserError as err:
-        raise InputError(f"{path}: not a readable CSV file ({_first_line(err)})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a text file (it is not UTF-8)") from None
     except (ValueError, KeyError, TypeError) as err:
         message = _first_line(err)
         raise InputError(message if str(path) in message else f"{path}: {message}") from None
 
 
-def read_csv(path):
-    """The CSV table at ``path`` with every cell as text as written (:func:`mutual.csvfile.read_text_csv`:
-    ``01``, ``1``, ``NA`` and ``None`` are distinct names; only empty cells are missing; a duplicated
-    column name or another delimiter is refused), with the errors of :func:`about` (file named, one line)."""
-    from ..csvfile import read_text_csv
+def read_csv(path, columns=None):
+    """The CSV table at ``path`` with every cell as text as written, each row with its line in the file
+    (:func:`mutual.inputs.read_csv`: ``01``, ``1``, ``NA`` and ``None`` are distinct names; only empty cells
+    are missing; a repeated column name, another delimiter or a row with more fields than the header is
+    refused), ``columns`` required, with the errors of :func:`about` (file named, one line)."""
+    from ..inputs import read_csv as read_table
     with about(path):
-        frame = read_text_csv(path)
-    if frame.empty:
-        raise InputError(f"{path}: no data rows after the header")
-    return frame
-
-
-def require_columns(frame, columns, path):
-    """Raise an InputError naming the file and the first missing column."""
-    missing = [c for c in columns if c not in frame.columns]
-    if missing:
-        raise InputError(f"{path}: missing column {missing[0]!r} (the file has columns {list(frame.columns)})")
+        return read_table(path, columns)
 
 
 def numeric_column(frame, column, path):
-    """The column as floats, or an InputError naming the file, the line and the column."""
-    import numpy as np
-    import pandas as pd
-    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-    bad = ~np.isfinite(values)
-    if bad.any():
-        row = int(bad.argmax())
-        line = int(frame.index[row]) + 2     # read_csv numbers data rows from 0; line 1 is the header
-        raw = frame[column].iloc[row]
-        what = "missing (empty or NA)" if pd.isna(raw) else f"{_shown(raw)} is not a finite number"
-        raise InputError(f"{path}: column {column!r}, line {line}: {what}")
-    return values
-
-
-def integer_column(frame, column, path, allow_empty=False):
-    """Check that every entry of the column is a whole number (or empty, with ``allow_empty``);
-    an InputError names the file, the column and the line of the first that is not."""
-    import numpy as np
-    import pandas as pd
-    raw = frame[column]
-    values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
-    empty = raw.isna().to_numpy() | (raw.astype(str).str.strip() == "").to_numpy()
-    with np.errstate(invalid="ignore"):
-        bad = ~np.isfinite(values) | (np.mod(values, 1) != 0)
-    bad &= ~empty if allow_empty else np.ones_like(bad)
-    if bad.any():
-        row = int(bad.argmax())
-        what = "empty" if empty[row] else f"{_shown(raw.iloc[row])} is not a whole number"
-        raise InputError(f"{path}: column {column!r}, line {int(frame.index[row]) + 2}: {what}")
+    """The column as floats, or an InputError naming the file, the line and the column
+    (:func:`mutual.inputs.number_column`; numbers that differ only beyond a double's digits are refused too)."""
+    from ..inputs import number_column
+    with about(path):
+        return number_column(frame, column, distinct=True)
 
 
 def check_out(args):
@@ -190,8 +172,8 @@ class OutputSet:
         return self.out / name
 
     def csv(self, frame, name):
-        """Write a DataFrame; numbers read back exactly (:func:`mutual.csvfile.format_exact`). Returns its final path."""
-        from ..csvfile import format_exact
+        """Write a DataFrame; numbers read back exactly (:func:`mutual.inputs.format_exact`). Returns its final path."""
+        from ..inputs import format_exact
         frame.to_csv(self.path(name), index=False, float_format=format_exact)
         return self.final(name)
 
@@ -327,7 +309,9 @@ def run(args, prog):
             minutes = budget.command_line_minutes()
         except ValueError as err:
             raise InputError(str(err)) from None
-        with budget.limits(minutes, getattr(args, "allow_large", False), "--allow-large"):
+        with budget.limits(minutes, getattr(args, "allow_large", False), "--allow-large"), \
+                warnings.catch_warnings():
+            warnings.showwarning = _show_warning(prog)
             args.handler(args)
         return EXIT_OK
     except budget.TooLarge as err:
@@ -377,22 +361,19 @@ def _terminate_cleanly():
     return lambda: signal.signal(signal.SIGTERM, previous)
 
 
+def _show_warning(prog):
+    """Warnings about the input (:class:`mutual.inputs.InputWarning`) as one line ``PROG: warning: ...`` on stderr."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        if category.__name__ == "InputWarning":
+            print(f"{prog}: warning: {message}", file=sys.stderr)
+        else:
+            print(warnings.formatwarning(message, category, filename, lineno, line).rstrip(), file=sys.stderr)
+    return show
+
+
 def _fail(prog, message, status):
     print(f"{prog}: error: {message}", file=sys.stderr)
     return status
-
-
-def _shown(value):
-    """A cell's value as the user wrote it: numbers plainly, text quoted."""
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, str):
-        try:
-            float(value)
-            return value.strip() if value.strip() == value else repr(value)   # a number, as written
-        except ValueError:
-            return repr(value)
-    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _first_line(err):

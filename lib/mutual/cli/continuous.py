@@ -8,6 +8,8 @@ true dynamics that respects --hidden constraints) or of a gridworld (chapter 3's
 Heavy libraries are imported inside the commands.
 """
 
+from contextlib import contextmanager
+
 from .. import budget
 from . import common, continuous_sizes
 
@@ -161,7 +163,7 @@ def run_infer_continuous(args):
         raise common.InputError(f"--families {args.families}: unknown family {unknown[0]!r}; choose from "
                                 f"{', '.join(FAMILIES)}")
     system = problem.system
-    with common.about(traj_path):
+    with common.about(traj_path), _dynamics_errors(system_path, system):
         recording = read_recording(traj_path, system.state_names, system.control_names)
         check_recording(problem, recording, args.truncate)
     scheduler = "inline" if args.inline else (args.scheduler or "auto")
@@ -170,13 +172,24 @@ def run_infer_continuous(args):
             bar.update(1)
             bar.set_postfix_str(detail[:60])
 
-        with common.about(traj_path):
+        with common.about(traj_path), _dynamics_errors(system_path, problem.system):
             run = infer(problem, recording, families=families, rounds=args.rounds,
                         min_gain=args.min_gain, truncate=args.truncate, scheduler=scheduler, workers=args.workers,
                         progress=progress, thresholds=args.thresholds, plane=spec.candidates["plane"],
                         every=spec.candidates["every"], radii=spec.candidates["radii"],
                         half_widths=spec.candidates["half_widths"])
     _report_inference(args, run, traj_path, system_path)
+
+
+@contextmanager
+def _dynamics_errors(system_path, system):
+    """A failure inside the dynamics (a user's ``module:function``) named by the system file, not the recordings."""
+    try:
+        yield
+    except ValueError as err:
+        if str(err).startswith(f"system {system.spec!r}"):
+            raise common.InputError(f"{system_path}: key 'system': {err}") from None
+        raise
 
 
 def _report_inference(args, run, traj_path, system_path):
@@ -192,7 +205,8 @@ def _report_inference(args, run, traj_path, system_path):
     stopped = {"rounds": "rounds", "min_gain": "min-gain", "no feasible candidate": "no candidate left"}[run.result.stop]
     results = {
         "command": "constraints infer-continuous", "input": str(traj_path), "system": str(system_path),
-        "dynamics": problem.system.spec, "n_demonstrations": mapped.demos.n, "steps": mapped.demos.steps,
+        "dynamics": problem.system.spec, "dynamics_file": problem.system.file,
+        "n_demonstrations": mapped.demos.n, "steps": mapped.demos.steps,
         "dt": problem.dt, "cells": list(problem.grid.shape), "n_states": problem.grid.n_cells,
         "n_controls": problem.n_actions, "scheme": problem.scheme, "thresholds": args.thresholds,
         "controls": {"recorded_snapped": mapped.snapped, "inferred": mapped.inferred,
@@ -209,7 +223,8 @@ def _report_inference(args, run, traj_path, system_path):
 
 def _summary(r, notes):
     lines = [f"Constraints from {r['n_demonstrations']} continuous demonstrations of {r['steps']} steps of "
-             f"{r['dt']:g} s ({r['input']}), system {r['dynamics']!r} on {' x '.join(map(str, r['cells']))} cells, "
+             f"{r['dt']:g} s ({r['input']}), system {r['dynamics']!r}{_code(r['dynamics_file'])} on "
+             f"{' x '.join(map(str, r['cells']))} cells, "
              f"{r['n_controls']} controls, {r['scheme']} discretization",
              f"Mapping: {notes}", f"{r['n_candidates']} candidates ({r['thresholds']} thresholds; "
                                   f"{r['thresholds_raised_by_lemma']} raised above eq. 3.3)", ""]
@@ -231,6 +246,11 @@ def _summary(r, notes):
     lines += ["", "F: Z_C+/Z_C0 (Algorithm 4); exact gain: per-demonstration increase of the log-likelihood.",
               "wrote " + ", ".join(r["outputs"].values())]
     return "\n".join(lines)
+
+
+def _code(file):
+    """`` (code run from FILE)`` for a user's dynamics (the system file's ``module:function``), else nothing."""
+    return f" (its code ran from {file})" if file else ""
 
 
 def run_simulate(args):
@@ -257,6 +277,9 @@ def _simulate_system(args):
         hidden = [parse_region(text, problem.grid.names, spec.candidates["plane"]) for text in texts]
     except ValueError as err:
         raise common.InputError(f"--hidden: {err}") from None
+    from ..constraints.continuous import check_start
+    with common.about(path):
+        check_start(hidden, texts, sim["start"], sim["spread"], f"{path}: key 'simulate.start'")
     n, seed = args.n or sim["n"], sim["seed"] if args.seed is None else args.seed
     kind = args.demonstrator or sim["demonstrator"]
     noise = sim["noise"] if args.noise is None else args.noise
@@ -279,11 +302,13 @@ def _simulate_system(args):
     out = files.final("trajectories.csv")
     states = np.concatenate(recording.states)
     ranges = {name: [float(states[:, i].min()), float(states[:, i].max())] for i, name in enumerate(problem.grid.names)}
-    results = {"command": "constraints simulate", "system": str(path), "demonstrator": kind, "hidden": list(texts),
+    results = {"command": "constraints simulate", "system": str(path), "dynamics": problem.system.spec,
+               "dynamics_file": problem.system.file, "demonstrator": kind, "hidden": list(texts),
                "n_demonstrations": n, "seed": seed, "noise": noise, "samples_per_demonstration": len(recording.times[0]),
                "period_seconds": float(recording.times[0][1] - recording.times[0][0]), "ranges": ranges,
                "controls_written": not args.no_controls, "outputs": {"trajectories": str(out)}}
-    lines = [f"Simulated {n} demonstrations of {problem.system.spec!r} ({kind} demonstrator on the continuous dynamics, "
+    lines = [f"Simulated {n} demonstrations of {problem.system.spec!r}{_code(problem.system.file)} ({kind} demonstrator "
+             "on the continuous dynamics, "
              f"seed {seed}) under hidden constraints: {', '.join(texts) or 'none'}",
              *[f"  {name}: {lo:.4g} .. {hi:.4g}" for name, (lo, hi) in ranges.items()], f"wrote {out}"]
     common.report(args, "\n".join(lines), results)

@@ -21,7 +21,7 @@ def _table(mapping, name):
 def declared(path, cells_option=None):
     """``(mapping, sizes)``: the file's raw mapping and the sizes it declares (cells with ``--cells`` applied,
     controls, samples, scheme, horizon, substeps), or ``sizes = None`` when a size is not a whole number."""
-    from ..tomlfile import read_toml
+    from ..inputs import read_toml
     with common.about(path):
         mapping = read_toml(path)
     state, time = _table(mapping, "state"), _table(mapping, "time")

@@ -85,12 +85,14 @@ def _filters(where):
 
 def _select(frame, args, path):
     """The rows and columns to analyse, with the file, column and line named on bad input."""
+    from ..inputs import name_column, require_columns
     filters = _filters(args.where)
     if args.dv not in frame.columns and {"measure", "value"} <= set(frame.columns) \
             and (frame["measure"] == args.dv).any():
         # a tidy trial table: --dv names a measure, analysed in the column 'value'
         frame = frame[frame["measure"] == args.dv].rename(columns={"value": args.dv})
-    common.require_columns(frame, [args.dv, args.within, args.subject] + [c for c, _ in filters], path)
+    with common.about(path):
+        require_columns(frame, [args.dv, args.within, args.subject] + [c for c, _ in filters])
     for column, value in filters:
         keep = frame[column].fillna("") == value          # compared as text, as written
         if not keep.any():
@@ -98,13 +100,9 @@ def _select(frame, args, path):
             raise common.InputError(f"{path}: no row has {column} = {value!r} (column {column!r} holds "
                                     f"{[_shown(v) for v in seen[:12]]})")
         frame = frame[keep]
-    from ..csvfile import check_names
-    for column in (args.subject, args.within):
-        empty = frame[column].isna() | (frame[column].fillna("").str.strip() == "")
-        if empty.any():
-            raise common.InputError(f"{path}: column {column!r}, line {int(frame.index[empty.argmax()]) + 2}: empty")
-        with common.about(path):
-            check_names(frame[column].tolist(), column, path, row=lambda i: f"line {int(frame.index[i]) + 2}")
+    with common.about(path):
+        for column in (args.subject, args.within):
+            name_column(frame, column, strip=False)      # empty names and names that differ only by spaces
     data = frame[[args.subject, args.within]]
     return data.assign(**{args.dv: common.numeric_column(frame, args.dv, path)})
 

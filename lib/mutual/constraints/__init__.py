@@ -24,12 +24,12 @@ __all__ = ["GRID_ACTIONS", "MDP", "Candidates", "Demonstrations", "Gridworld", "
            "constraint_mask", "controller_check", "expected_next", "gradient_check", "greedy_bound_survey",
            "greedy_inference", "gridworld", "gridworld_ranking_work", "lemma_321_exact", "load_demonstrations",
            "load_world", "log_partition", "log_partition_literal", "masked_logsumexp", "max_likelihood_thresholds",
-           "plot_actions", "plot_states", "psi_star_by_loop", "rank_candidates", "sample_demonstrations",
-           "sample_trajectories", "score_candidates", "soft_bellman_backup", "soft_policy", "state_action_visitation",
-           "value_ratio", "write_demonstrations"]
+           "plot_actions", "plot_states", "printed_gradient_check", "psi_star_by_loop", "rank_candidates",
+           "sample_demonstrations", "sample_trajectories", "score_candidates", "soft_bellman_backup", "soft_policy",
+           "state_action_visitation", "value_ratio", "write_demonstrations"]
 
 # the world file, the figures and the independent checks of chapters 2-3, imported on first use
 __getattr__ = lazy_names(__name__, {
     "load_world": "world", "plot_states": "plots", "plot_actions": "plots",
     "causal_versus_noncausal": "noncausal", "controller_check": "controllers", "gradient_check": "gradient",
-    "greedy_bound_survey": "subsets", "gridworld_ranking_work": "complexity"})
+    "printed_gradient_check": "gradient", "greedy_bound_survey": "subsets", "gridworld_ranking_work": "complexity"})

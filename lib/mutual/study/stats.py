@@ -105,11 +105,11 @@ class RMAnova:
         return self.mse
 
     def standard_errors(self):
-        """The standard error of each level's mean over subjects (``sd / sqrt(n)``), computed in scaled units."""
+        """The standard error of each level's mean over subjects (``sd / sqrt(n)``), each level computed in its own
+        scaled units (a huge value in one level leaves the others' digits alone)."""
         y = self.cells.to_numpy(dtype=float)
-        e = _exponent(y)
-        sd = np.ldexp(np.ldexp(y, -e).std(axis=0, ddof=1), e)
-        return {level: float(v) for level, v in zip(self.levels, sd / np.sqrt(len(y)))}
+        sd = [float(_ldexp_quiet(np.ldexp(c, -_exponent(c)).std(ddof=1), _exponent(c))) for c in y.T]
+        return {level: v / np.sqrt(len(y)) for level, v in zip(self.levels, sd)}
 
     # the names of earlier versions (statsmodels' words)
     @property
@@ -145,7 +145,7 @@ class RMAnova:
 
 def _distinct_levels(columns):
     """Refuse a wide table whose level columns repeat a name (a pair would be tested twice, or with itself)."""
-    from ..csvfile import check_names
+    from ..inputs import check_names
     seen = set()
     for name in columns:
         if name in seen:
@@ -186,7 +186,9 @@ def _anova_of_cells(wide, dv, within, subject):
     ss_subjects = float(k * np.sum((row - grand) ** 2))
     if _negligible(ss_within, y):
         what = f"every value is {raw.flat[0]:g}" if np.all(raw == raw.flat[0]) else \
-            f"every subject has one value at every level of {within!r}"
+            f"every subject has one value at every level of {within!r}" if np.all(raw == raw[:, :1]) else \
+            f"its values differ within subjects by less than 1e-13 of the largest, {np.max(np.abs(raw)):.6g}: too " \
+            "little to tell from rounding"
         raise DegenerateDataError(f"{dv!r} does not vary within subjects ({what}): the repeated-measures F is 0/0, "
                                   "so there is nothing to test")
     if _negligible(ss_error, y):
@@ -276,17 +278,19 @@ def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, lev
         raise ValueError("cells must be a complete table of finite numbers (no NaN: every subject needs every level)")
     _check_pairs(y.shape[1], y.shape[0], allow_large)
     rows = []
-    e = _exponent(y)
-    z = np.ldexp(y, -e)                   # t is scale-free; the squares stay representable (1e-170 or 1e170)
     for (i, a), (j, b) in combinations(enumerate(wide.columns), 2):
-        d = z[:, i] - z[:, j]
-        if _negligible(float(np.sum((d - d.mean()) ** 2)), np.concatenate([z[:, i], z[:, j]])):
-            what = "identical for every subject" if _negligible(float(np.sum(d ** 2)), z[:, [i, j]]) else \
-                f"the same for every subject ({np.ldexp(d[0], e):g})"
+        e = _exponent(y[:, [i, j]])       # each pair in its own units: t is scale-free, and a huge value in another
+        z = np.ldexp(y[:, [i, j]], -e)    # level leaves this pair's digits alone (1e-170 or 1e170 alike)
+        d = z[:, 0] - z[:, 1]
+        if _negligible(float(np.sum((d - d.mean()) ** 2)), z.ravel()):
+            what = "identical for every subject" if not d.any() else \
+                f"the same for every subject ({_ldexp_quiet(d[0], e):g})" if np.all(d == d[0]) else \
+                "the same for every subject to within 1e-13 of the largest value " \
+                f"({np.max(np.abs(y[:, [i, j]])):.6g}): too little to tell from rounding"
             raise DegenerateDataError(f"levels {a!r} and {b!r}: the paired differences are {what}, so the paired t "
                                       "statistic is undefined (zero variance)")
-        res = stats.ttest_rel(z[:, i], z[:, j])
-        rows.append((a, b, float(np.ldexp(d.mean(), e)), float(res.statistic), int(res.df), float(res.pvalue)))
+        res = stats.ttest_rel(z[:, 0], z[:, 1])
+        rows.append((a, b, float(_ldexp_quiet(d.mean(), e)), float(res.statistic), int(res.df), float(res.pvalue)))
     out = pd.DataFrame(rows, columns=["A", "B", "mean_diff", "t", "df", "p"])
     out["p_holm"] = holm(out["p"].to_numpy())
     return out

@@ -28,7 +28,8 @@ from tqdm import tqdm
 
 from .. import __version__, budget
 from . import value_cache, value_function
-from .dubins import SPEED, DubinsCar, _check_positive, _real, unsafe_reach
+from ..inputs import positive, real
+from .dubins import SPEED, DubinsCar, unsafe_reach
 from .value_function import (FULL_GRID, METHODS, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary,  # noqa: F401
                              unsafe_set_contains)
 
@@ -49,7 +50,7 @@ class SolverSpec:
         if self.accuracy not in ACCURACIES:
             raise ValueError(f"accuracy must be one of {ACCURACIES}, got {self.accuracy!r}")
         for name in ("chunk_time", "tolerance", "max_time"):
-            _check_positive(name, getattr(self, name))
+            positive(name, getattr(self, name))
 
 
 @functools.lru_cache(maxsize=None)
@@ -168,9 +169,9 @@ def _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_ma
         raise ValueError(f"w_maxes must be a non-empty 1-D sequence of positive finite numbers, got {w_maxes!r}")
     if len(np.unique(w)) != len(w):
         raise ValueError(f"w_maxes must not repeat values, got {w.tolist()}")
-    _check_positive("obstacle_radius", obstacle_radius)
-    _check_positive("speed", speed)
-    if _real(d_max) is None or not np.isfinite(_real(d_max)) or d_max < 0:
+    positive("obstacle_radius", obstacle_radius)
+    positive("speed", speed)
+    if real(d_max) is None or not np.isfinite(real(d_max)) or d_max < 0:
         raise ValueError(f"d_max must be a non-negative finite number, got {d_max!r}")
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -193,8 +194,8 @@ def closed_form_values(w_max, obstacle_radius, grid_spec, speed=SPEED, tol=1e-9)
     The formula of :func:`~mutual.supervision.dubins.avoid_value_closed_form`, broadcast over the
     grid's axes (x, y, theta) instead of evaluated state by state.
     """
-    big_r = _check_positive("speed", speed) / _check_positive("w_max", w_max)
-    radius = _check_positive("obstacle_radius", obstacle_radius)
+    big_r = positive("speed", speed) / positive("w_max", w_max)
+    radius = positive("obstacle_radius", obstacle_radius)
     xs, ys, ts = grid_spec.coordinate_vectors
     x, y = xs[:, None, None], ys[None, :, None]
     cos, sin = np.cos(ts)[None, None, :], np.sin(ts)[None, None, :]
@@ -252,7 +253,7 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
 def avoid_value_function(w_max, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSpec(), speed=SPEED, d_max=0.0,
                          cache=True, progress=True, method="hj"):
     """The converged avoid value function V of eq. (4.3) for one Dubins car (see ``value_library``)."""
-    if _real(w_max) is None:
+    if real(w_max) is None:
         raise ValueError(f"w_max must be a positive finite number, got {w_max!r}")
     return value_library([w_max], obstacle_radius, grid_spec, solver, speed, d_max, cache=cache,
                          progress=progress, method=method)[0]
@@ -267,7 +268,7 @@ def value_drift(value_fn, extra_time, solver=SolverSpec()):
     """
     if not isinstance(value_fn, ValueFunction) or value_fn.method != "hj":
         raise ValueError("value_fn must be a ValueFunction computed with method='hj'")
-    _check_positive("extra_time", extra_time)
+    positive("extra_time", extra_time)
     if not isinstance(solver, SolverSpec):
         raise ValueError(f"solver must be a SolverSpec, got {type(solver).__name__}")
     stepper = _chunk_stepper(value_fn.grid_spec, solver.accuracy, False)
@@ -293,7 +294,7 @@ def closed_form_agreement(library, near_cells=2.0):
         raise ValueError("library must be a ValueLibrary computed with method='hj'")
     if library.members[0].d_max > 0:
         raise ValueError("the closed form has no disturbance: library must have d_max = 0")
-    _check_positive("near_cells", near_cells)
+    positive("near_cells", near_cells)
     spec, dx = library.grid_spec, library.grid_spec.spacings[0]
     rows = []
     for vf in library:

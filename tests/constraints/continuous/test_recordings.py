@@ -48,7 +48,7 @@ def test_unequal_durations_can_be_truncated(tmp_path):
 @pytest.mark.parametrize("text, phrase", [
     ("", "the file is empty"),
     ("demo,t,theta\n", "line 1: missing column 'theta_dot'"),
-    (PENDULUM_CSV, "no rows after the header"),
+    (PENDULUM_CSV, "no data rows after the header"),
     (PENDULUM_CSV + "a,0,zero,0,3\na,0.1,0,0,3\n", r"line 2, column 'theta': 'zero' is not a finite number"),
     (PENDULUM_CSV + "a,0,0,nan,3\na,0.1,0,0,3\n", r"line 2, column 'theta_dot'"),
     (PENDULUM_CSV + "a,0,0,0,3\n,0.1,0,0,3\n", "line 3, column 'demo': empty"),

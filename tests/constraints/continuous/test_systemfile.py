@@ -34,14 +34,14 @@ def changed(path, value):
     ("state.low", [0.0, 0.0, 0.0], "key 'state.low': system 'pendulum' has 2 coordinates"),
     ("state.periodic", ["phi"], "'phi' is not a state coordinate"),
     ("control.values", [1.0, 1.0], "key 'control.values'.*distinct"),
-    ("time.dt", 0, "key 'time.dt': must be a number > 0"),
+    ("time.dt", 0, "key 'time.dt': must be a positive finite number"),
     ("time.horizon", 2.5, "key 'time.horizon': must be an integer >= 1"),
     ("discretization.scheme", "magic", "key 'discretization.scheme'"),
     ("reward.goal", [1.0], "key 'reward.goal': must be a list of 2 numbers"),
     ("reward.temperature", -1.0, "key 'reward.temperature'"),
     ("candidates.families", ["blob"], "unknown family 'blob'"),
     ("simulate.hidden", ["speed < 3"], "'speed' is not a state coordinate"),
-    ("simulate.demonstrator", "human", "must be 'soft' or 'mppi'"),
+    ("simulate.demonstrator", "human", r"must be one of \['soft', 'mppi'\]"),
     ("system", "rocket", "key 'system'"),
 ])
 def test_a_bad_system_file_names_the_key(path, value, phrase):

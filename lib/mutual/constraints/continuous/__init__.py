@@ -30,15 +30,16 @@ from .mapping import check_recording, to_demonstrations
 from .problem import Problem, QuadraticReward
 from .recordings import Recording, read_recording, write_recording
 from .regions import Bound, Box, Disk, boundary_distance, parse_region
-from .systemfile import load_system, system_from_mapping
+from .systemfile import check_start, load_system, system_from_mapping
 from .systems import SYSTEMS, System, integrate, named_system
 
-__all__ = ["SYSTEMS", "Bound", "Box", "ContinuousInference", "Disk", "Grid", "Problem", "QuadraticReward", "Recording",
-           "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors", "box_regions",
-           "check_recording", "convergence", "demos_sweep", "discretize", "disk_regions", "inference_figure", "infer",
-           "integrate", "load_system", "mppi_rollouts", "named_system", "parse_region", "read_recording", "refinement",
-           "region_candidates", "resolution_sweep", "rollout", "soft_demonstrator", "starts_around", "summary",
-           "system_from_mapping", "timed_inference", "to_demonstrations", "with_cells", "write_recording"]
+__all__ = ["SYSTEMS", "Bound", "Box", "ContinuousInference", "Disk", "Grid", "Problem", "QuadraticReward",
+           "Recording", "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors",
+           "box_regions", "check_recording", "check_start", "convergence", "demos_sweep", "discretize",
+           "disk_regions", "inference_figure", "infer", "integrate", "load_system", "mppi_rollouts", "named_system",
+           "parse_region", "read_recording", "refinement", "region_candidates", "resolution_sweep", "rollout",
+           "soft_demonstrator", "starts_around", "summary", "system_from_mapping", "timed_inference",
+           "to_demonstrations", "with_cells", "write_recording"]
 
 # notebook 09's measurements, the refinement, the soft HJB check and the figure, imported on first use
 __getattr__ = lazy_names(__name__, {
