@@ -243,8 +243,10 @@ def test_notebook_reports_every_chapter_4_claim_with_its_computation(executed_no
     # checks of the estimator and the library that hold on the quick grid too
     for key in ("c4-keepout-in-reachable", "c4-library-nested", "c4-conservative-supervisor-nesting",
                 "c4-mle-mean-variance", "c4-map-mu-clipped", "c4-min-invasive-keeps-out",
-                "c4-learned-fewer-fp-than-standard", "c4-fp-vanish-as-fit-approaches"):
+                "c4-learned-fewer-fp-than-standard", "c4-fp-vanish-as-fit-approaches",
+                "c4-zero-level-set-boundary-corrected"):
         assert values[key] is True, key
+    assert values["c4-zero-level-set-boundary"] > 0.5  # line 862 as printed: a car heading into the disk has V < 0
     assert values["c4-fig43-fit-wmax"] in list(0.25 * np.arange(1, 13))
     assert values["c4-alpha-2sigma-avoids-97pct"] == pytest.approx(0.978, abs=1e-3)  # exact, for p = 40
     assert values["c4-property-no-false-positives"] == 0  # on exact values (issue 20)

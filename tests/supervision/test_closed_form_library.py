@@ -7,7 +7,7 @@ import pytest
 
 from mutual.supervision.dubins import avoid_value_closed_form, dubins_step, keep_out_margin
 from mutual.supervision.exact import exact_value_function
-from mutual.supervision.value_function import QUICK_GRID
+from mutual.supervision.value_function import QUICK_GRID, boundary_values
 
 R_OBS = 1.0
 
@@ -42,7 +42,7 @@ def test_on_the_boundary_of_the_disk_only_headings_into_it_are_unsafe(w_max):
     """On |p| = r: V = 0 where the car does not head into the disk (driving straight keeps l >= 0, and V <= l = 0)
     and V < 0 where it does; the exact value matches the best rollout at every one of these states."""
     vf = exact_value_function(w_max, R_OBS, QUICK_GRID)
-    values, approaching = vf.boundary_values(n_points=3, n_headings=12)
+    values, approaching = boundary_values(vf, n_points=3, n_headings=12)
     assert approaching.sum() == values.size // 2
     assert np.all(values[~approaching] == pytest.approx(0.0, abs=1e-12)) and np.all(values[approaching] < 0)
     around = np.repeat(2 * np.pi * np.arange(3) / 3, 12)
@@ -57,4 +57,6 @@ def test_on_the_boundary_of_the_disk_only_headings_into_it_are_unsafe(w_max):
                                              ({"n_points": True}, "n_points must be an integer >= 2")])
 def test_bad_boundary_sampling_is_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        exact_value_function(1.0, R_OBS, QUICK_GRID).boundary_values(**kwargs)
+        boundary_values(exact_value_function(1.0, R_OBS, QUICK_GRID), **kwargs)
+    with pytest.raises(ValueError, match="value_fn must be a ValueFunction, got ndarray"):
+        boundary_values(np.zeros((2, 3)))

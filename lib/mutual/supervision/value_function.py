@@ -193,24 +193,6 @@ class ValueFunction:
         x0, x1, v0, v1 = xs[i - 1], xs[i], v[i - 1], v[i]
         return float(-(x0 + (x1 - x0) * v0 / (v0 - v1)))
 
-    def boundary_values(self, n_points=36, n_headings=72):
-        """V on the boundary of the keep-out disk, ``|p| = r`` (line 862: the zero level set and the boundary
-        of H), at ``n_points`` positions around it and ``n_headings`` headings at each: ``(values, approaching)``,
-        arrays of shape (n_points, n_headings). ``approaching`` marks the headings that point into the disk
-        (``p . h < 0``); the headings sit half a step off the tangents, so none is exactly tangent."""
-        for name, n in (("n_points", n_points), ("n_headings", n_headings)):
-            if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 2:
-                raise ValueError(f"{name} must be an integer >= 2, got {n!r}")
-        around = 2 * np.pi * np.arange(n_points) / n_points
-        offset = 2 * np.pi * (np.arange(n_headings) + 0.5) / n_headings  # heading relative to the outward normal
-        position = np.repeat(around, n_headings)
-        heading = position + np.tile(offset, n_points)
-        r = self.obstacle_radius
-        states = np.stack([r * np.cos(position), r * np.sin(position), np.remainder(heading + np.pi, 2 * np.pi) - np.pi], 1)
-        approaching = np.cos(np.tile(offset, n_points)) < 0
-        shape = (n_points, n_headings)
-        return self.interp(states).reshape(shape), approaching.reshape(shape)
-
 
 def _interpolate(spec, flat_values, states, fill_value):
     """Trilinear interpolation of each row of ``flat_values`` (b, nx*ny*nt) at ``states`` -> (b, n)."""
@@ -306,6 +288,26 @@ class ValueLibrary:
         if self.members[0].exact:
             return np.stack([m.interp(states, fill_value) for m in self.members])
         return _interpolate(self.grid_spec, self.flat_values, states, fill_value)
+
+
+def boundary_values(value_fn, n_points=36, n_headings=72):
+    """V on the boundary of the keep-out disk, ``|p| = r`` (line 862: the zero level set and the boundary of H),
+    at ``n_points`` positions around it and ``n_headings`` headings at each: ``(values, approaching)``, arrays of
+    shape (n_points, n_headings) from ``value_fn.interp`` (exact for an exact value function). ``approaching``
+    marks the headings that point into the disk (``p . h < 0``); the headings sit half a step off the tangents,
+    so none is exactly tangent."""
+    if not isinstance(value_fn, ValueFunction):
+        raise ValueError(f"value_fn must be a ValueFunction, got {type(value_fn).__name__}")
+    for name, n in (("n_points", n_points), ("n_headings", n_headings)):
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 2:
+            raise ValueError(f"{name} must be an integer >= 2, got {n!r}")
+    around = 2 * np.pi * np.arange(n_points) / n_points
+    offset = np.tile(2 * np.pi * (np.arange(n_headings) + 0.5) / n_headings, n_points)  # from the outward normal
+    position = np.repeat(around, n_headings)
+    r = value_fn.obstacle_radius
+    states = np.stack([r * np.cos(position), r * np.sin(position), np.remainder(position + offset + np.pi, 2 * np.pi) - np.pi], 1)
+    shape = (n_points, n_headings)
+    return value_fn.interp(states).reshape(shape), (np.cos(offset) < 0).reshape(shape)
 
 
 def unsafe_set_contains(outer, inner, level=0.0):
