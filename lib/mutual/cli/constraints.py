@@ -7,6 +7,7 @@ its maximum-likelihood threshold psi* (eq. 3.3) and one constraint per action
 (Algorithm 4, eq. 2.25; :func:`mutual.constraints.greedy_inference`), until the stop rule fires.
 """
 
+from .. import budget
 from . import common, continuous
 
 DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 10, 0.1, 5
@@ -125,18 +126,7 @@ def run_infer(args):
     with common.about(world_path):
         grid = load_world(world_path)
     mdp = grid.mdp
-    frame = common.read_csv(demos_path)        # the columns first, naming the line of a bad entry
-    common.require_columns(frame, ("demo", "t", "state", "action"), demos_path)
-    for column in ("demo", "t", "state"):
-        common.integer_column(frame, column, demos_path)
-    common.integer_column(frame, "action", demos_path, allow_empty=True)
-    t = frame["t"].astype(float)          # read as text: compare the numbers, not the strings
-    last = t == t.groupby(frame["demo"].astype(float)).transform("max")
-    gap = frame["action"].isna() & ~last
-    if gap.any():
-        row = int(gap.to_numpy().argmax())
-        raise common.InputError(f"{demos_path}: column 'action', line {row + 2}: empty, but only each "
-                                "demonstration's last row (largest t) may have no action")
+    budget.check(budget.gridworld_inference(mdp.n_states, mdp.n_actions, mdp.horizon, args.rounds))
     with common.about(demos_path):
         demos = load_demonstrations(demos_path, mdp)
         cand = constraint_candidates(mdp, demos)

@@ -8,7 +8,10 @@ true dynamics that respects --hidden constraints) or of a gridworld (chapter 3's
 Heavy libraries are imported inside the commands.
 """
 
-from . import common
+from contextlib import contextmanager
+
+from .. import budget
+from . import common, continuous_sizes
 
 DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 5, 0.1, 5
 FAMILIES = ("bound", "disk", "box", "cell")   # mutual.constraints.continuous.candidates.FAMILIES (no numpy here; a test checks)
@@ -150,6 +153,7 @@ def _with_overrides(args, problem, system_path):
 def run_infer_continuous(args):
     _check_options(args)
     traj_path, system_path = common.existing_file(args.trajectories), common.existing_file(args.system)
+    continuous_sizes.check_inference(system_path, args)      # before the grid is built
     from ..constraints.continuous import infer, load_system, read_recording
     from ..constraints.continuous.mapping import check_recording
     with common.about(system_path):
@@ -161,7 +165,7 @@ def run_infer_continuous(args):
         raise common.InputError(f"--families {args.families}: unknown family {unknown[0]!r}; choose from "
                                 f"{', '.join(FAMILIES)}")
     system = problem.system
-    with common.about(traj_path):
+    with common.about(traj_path), _dynamics_errors(system_path, system):
         recording = read_recording(traj_path, system.state_names, system.control_names)
         check_recording(problem, recording, args.truncate)
     scheduler = "inline" if args.inline else (args.scheduler or "auto")
@@ -170,13 +174,24 @@ def run_infer_continuous(args):
             bar.update(1)
             bar.set_postfix_str(detail[:60])
 
-        with common.about(traj_path):
+        with common.about(traj_path), _dynamics_errors(system_path, problem.system):
             run = infer(problem, recording, families=families, rounds=args.rounds,
                         min_gain=args.min_gain, truncate=args.truncate, scheduler=scheduler, workers=args.workers,
                         progress=progress, thresholds=args.thresholds, plane=spec.candidates["plane"],
                         every=spec.candidates["every"], radii=spec.candidates["radii"],
                         half_widths=spec.candidates["half_widths"])
     _report_inference(args, run, traj_path, system_path)
+
+
+@contextmanager
+def _dynamics_errors(system_path, system):
+    """A failure inside the dynamics (a user's ``module:function``) named by the system file, not the recordings."""
+    try:
+        yield
+    except ValueError as err:
+        if str(err).startswith(f"system {system.spec!r}"):
+            raise common.InputError(f"{system_path}: key 'system': {err}") from None
+        raise
 
 
 def _report_inference(args, run, traj_path, system_path):
@@ -192,7 +207,8 @@ def _report_inference(args, run, traj_path, system_path):
     stopped = {"rounds": "rounds", "min_gain": "min-gain", "no feasible candidate": "no candidate left"}[run.result.stop]
     results = {
         "command": "constraints infer-continuous", "input": str(traj_path), "system": str(system_path),
-        "dynamics": problem.system.spec, "n_demonstrations": mapped.demos.n, "steps": mapped.demos.steps,
+        "dynamics": problem.system.spec, "dynamics_file": problem.system.file,
+        "n_demonstrations": mapped.demos.n, "steps": mapped.demos.steps,
         "dt": problem.dt, "cells": list(problem.grid.shape), "n_states": problem.grid.n_cells,
         "n_controls": problem.n_actions, "scheme": problem.scheme, "thresholds": args.thresholds,
         "controls": {"recorded_snapped": mapped.snapped, "inferred": mapped.inferred,
@@ -209,7 +225,8 @@ def _report_inference(args, run, traj_path, system_path):
 
 def _summary(r, notes):
     lines = [f"Constraints from {r['n_demonstrations']} continuous demonstrations of {r['steps']} steps of "
-             f"{r['dt']:g} s ({r['input']}), system {r['dynamics']!r} on {' x '.join(map(str, r['cells']))} cells, "
+             f"{r['dt']:g} s ({r['input']}), system {r['dynamics']!r}{_code(r['dynamics_file'])} on "
+             f"{' x '.join(map(str, r['cells']))} cells, "
              f"{r['n_controls']} controls, {r['scheme']} discretization",
              f"Mapping: {notes}", f"{r['n_candidates']} candidates ({r['thresholds']} thresholds; "
                                   f"{r['thresholds_raised_by_lemma']} raised above eq. 3.3)", ""]
@@ -233,6 +250,11 @@ def _summary(r, notes):
     return "\n".join(lines)
 
 
+def _code(file):
+    """`` (code run from FILE)`` for a user's dynamics (the system file's ``module:function``), else nothing."""
+    return f" (its code ran from {file})" if file else ""
+
+
 def run_simulate(args):
     if args.n is not None and args.n < 1:
         raise common.InputError(f"--n {args.n}: must be at least 1")
@@ -248,6 +270,7 @@ def _simulate_system(args):
     from ..constraints.continuous import demonstrators as dm
     from ..constraints.continuous import load_system, parse_region, write_recording
     path = common.existing_file(args.system)
+    continuous_sizes.check_simulation(path, args)            # before the grid is built
     with common.about(path):
         spec = load_system(path)
     problem, sim = spec.problem, dict(spec.simulate)
@@ -256,6 +279,9 @@ def _simulate_system(args):
         hidden = [parse_region(text, problem.grid.names, spec.candidates["plane"]) for text in texts]
     except ValueError as err:
         raise common.InputError(f"--hidden: {err}") from None
+    from ..constraints.continuous.systemfile import check_start
+    with common.about(path):
+        check_start(hidden, texts, sim["start"], sim["spread"], f"{path}: key 'simulate.start'")
     n, seed = args.n or sim["n"], sim["seed"] if args.seed is None else args.seed
     kind = args.demonstrator or sim["demonstrator"]
     noise = sim["noise"] if args.noise is None else args.noise
@@ -278,11 +304,13 @@ def _simulate_system(args):
     out = files.final("trajectories.csv")
     states = np.concatenate(recording.states)
     ranges = {name: [float(states[:, i].min()), float(states[:, i].max())] for i, name in enumerate(problem.grid.names)}
-    results = {"command": "constraints simulate", "system": str(path), "demonstrator": kind, "hidden": list(texts),
+    results = {"command": "constraints simulate", "system": str(path), "dynamics": problem.system.spec,
+               "dynamics_file": problem.system.file, "demonstrator": kind, "hidden": list(texts),
                "n_demonstrations": n, "seed": seed, "noise": noise, "samples_per_demonstration": len(recording.times[0]),
                "period_seconds": float(recording.times[0][1] - recording.times[0][0]), "ranges": ranges,
                "controls_written": not args.no_controls, "outputs": {"trajectories": str(out)}}
-    lines = [f"Simulated {n} demonstrations of {problem.system.spec!r} ({kind} demonstrator on the continuous dynamics, "
+    lines = [f"Simulated {n} demonstrations of {problem.system.spec!r}{_code(problem.system.file)} ({kind} demonstrator "
+             "on the continuous dynamics, "
              f"seed {seed}) under hidden constraints: {', '.join(texts) or 'none'}",
              *[f"  {name}: {lo:.4g} .. {hi:.4g}" for name, (lo, hi) in ranges.items()], f"wrote {out}"]
     common.report(args, "\n".join(lines), results)
@@ -327,6 +355,7 @@ def _simulate_world(args):
     if any(not 0 <= p <= 1 for p in psi):
         raise common.InputError("--hidden: psi must lie in [0, 1]")
     n, seed = args.n or 100, args.seed or 0
+    budget.check(budget.demonstrations(n, grid.mdp.horizon))
     with common.about(path):
         mask = constraint_mask(grid.mdp, states, psi if psi else 0.0, actions)
         demos = sample_demonstrations(grid.mdp, n, mask, rng=seed)

@@ -14,14 +14,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..inputs import check_number
 from .errors import DegenerateDataError
-
-
-def _positive_integer(name, value):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)) \
-            or not np.isfinite(value) or value != int(value) or value < 1:
-        raise ValueError(f"{name} must be a positive whole number, got {value!r}")
-    return int(value)
 
 
 def f_p_value(F, df_num, df_den):
@@ -36,7 +30,7 @@ def f_p_value(F, df_num, df_den):
 
 def design_from_f_dofs(df_num, df_den):
     """Levels k = df_num + 1 and subjects n = df_den / df_num + 1 of a one-way repeated-measures F."""
-    df_num, df_den = _positive_integer("df_num", df_num), _positive_integer("df_den", df_den)
+    df_num, df_den = check_number("df_num", df_num, low=1, whole=True), check_number("df_den", df_den, low=1, whole=True)
     if df_den % df_num:
         raise ValueError(f"F({df_num}, {df_den}) is not a one-way repeated-measures design "
                          f"(df_den must be a multiple of df_num)")

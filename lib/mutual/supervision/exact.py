@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dubins import _check_positive, check_states, closed_form_dtheta, closed_form_values
+from ..inputs import positive
+from .dubins import check_states, closed_form_dtheta, closed_form_values
 from .value_function import FULL_GRID, GridSpec, ValueFunction, ValueLibrary
 
 
@@ -47,12 +48,12 @@ def exact_value_function(w_max, radius, grid_spec=FULL_GRID, speed=None):
     """The exact value function of the Dubins car with turn rate ``w_max`` around a disk of ``radius``."""
     from .dubins import SPEED
 
-    speed = SPEED if speed is None else _check_positive("speed", speed)
+    speed = SPEED if speed is None else positive("speed", speed)
     if not isinstance(grid_spec, GridSpec):
         raise ValueError(f"grid_spec must be a GridSpec, got {type(grid_spec).__name__}")
     nodes = grid_spec.nodes
-    values = closed_form_values(nodes[:, 0], nodes[:, 1], nodes[:, 2], speed / _check_positive("w_max", w_max),
-                                _check_positive("radius", radius)).reshape(grid_spec.shape)
+    values = closed_form_values(nodes[:, 0], nodes[:, 1], nodes[:, 2], speed / positive("w_max", w_max),
+                                positive("radius", radius)).reshape(grid_spec.shape)
     return ExactValueFunction(float(w_max), float(radius), grid_spec, values, speed=speed, method="closed-form")
 
 

@@ -13,16 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .dubins import SPEED, _check_positive, _real, check_states
+from ..inputs import finite, positive, real
+from .dubins import SPEED, check_states
 
 METHODS = ("hj", "closed-form")
-
-
-def _check_finite(name, value):
-    x = _real(value)
-    if x is None or not np.isfinite(x):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-    return x
 
 
 def _fmt(x):
@@ -36,7 +30,7 @@ class GridSpec:
     shape: tuple = (101, 101, 64)
 
     def __post_init__(self):
-        _check_positive("half_width", self.half_width)
+        positive("half_width", self.half_width)
         if isinstance(self.shape, (str, bytes)) or not hasattr(self.shape, "__len__"):
             raise ValueError(f"shape must be three integers >= 5 (nx, ny, ntheta), got {self.shape!r}")
         shape = tuple(self.shape)
@@ -113,10 +107,10 @@ class ValueFunction:
     def __post_init__(self):
         if not isinstance(self.grid_spec, GridSpec):
             raise ValueError(f"grid_spec must be a GridSpec, got {type(self.grid_spec).__name__}")
-        _check_positive("w_max", self.w_max)
-        _check_positive("obstacle_radius", self.obstacle_radius)
-        _check_positive("speed", self.speed)
-        if _real(self.d_max) is None or not np.isfinite(_real(self.d_max)) or self.d_max < 0:
+        positive("w_max", self.w_max)
+        positive("obstacle_radius", self.obstacle_radius)
+        positive("speed", self.speed)
+        if real(self.d_max) is None or not np.isfinite(real(self.d_max)) or self.d_max < 0:
             raise ValueError(f"d_max must be a non-negative finite number, got {self.d_max!r}")
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
@@ -155,16 +149,16 @@ class ValueFunction:
         ``u_max`` defaults to this model's ``w_max``; a robot whose true turn rate differs passes its own.
         """
         u_max = self.w_max if u_max is None else u_max
-        _check_positive("u_max", u_max)
+        positive("u_max", u_max)
         return np.where(self.interp_dtheta(states, fill_value=0.0) >= 0, u_max, -u_max)
 
     def safe_set(self, level=0.0):
         """Boolean grid of the safe set at ``level``, ``{x : V(x) >= level}`` (Omega at level 0)."""
-        return self.values >= _check_finite("level", level)
+        return self.values >= finite("level", level)
 
     def theta_slice(self, theta, resolution=201):
         """``(xs, ys, V)`` on a regular (x, y) mesh at heading ``theta`` (V indexed [y, x], for contour plots)."""
-        theta = _check_finite("theta", theta)
+        theta = finite("theta", theta)
         if isinstance(resolution, bool) or not isinstance(resolution, numbers.Integral) or resolution < 2:
             raise ValueError(f"resolution must be an integer >= 2, got {resolution!r}")
         w = self.grid_spec.half_width
@@ -179,7 +173,7 @@ class ValueFunction:
 
         For the Dubins car without disturbance at ``level = 0`` this is ``sqrt(2 R r + r^2)``, ``R = v / w_max``.
         """
-        level = _check_finite("level", level)
+        level = finite("level", level)
         xs, _, _ = self.grid_spec.coordinate_vectors
         ahead = xs <= 0
         states = np.stack([xs[ahead], np.zeros(ahead.sum()), np.zeros(ahead.sum())], axis=1)
@@ -272,7 +266,7 @@ class ValueLibrary:
 
     def index_of(self, w_max):
         """Index of the member with this ``w_max`` (ValueError if none within 1e-9)."""
-        w_max = _check_finite("w_max", w_max)
+        w_max = finite("w_max", w_max)
         i = int(np.argmin(np.abs(self.w_maxes - w_max)))
         if abs(self.w_maxes[i] - w_max) > 1e-9:
             raise ValueError(f"w_max={w_max!r} is not in the library {self.w_maxes.tolist()}")
@@ -319,7 +313,7 @@ def unsafe_set_contains(outer, inner, level=0.0):
     """
     if not isinstance(outer, ValueFunction) or not isinstance(inner, ValueFunction):
         raise ValueError("outer and inner must both be mutual.supervision.ValueFunction")
-    level = _check_finite("level", level)
+    level = finite("level", level)
     if outer.grid_spec != inner.grid_spec:
         raise ValueError("outer and inner must share one grid_spec")
     return bool(np.all(outer.values[inner.values < 0] < level))
