@@ -50,15 +50,17 @@ def test_results_name_the_function_the_notebook_calls(stem, executed_notebook):
     for cid, entry in sorted(results.items()):
         if BASIS[cid] not in CHECKED:
             continue
-        if not entry.get("note", "").strip():
-            problems.append(f"claim {cid}: no note naming the computation")
-        try:
-            target = resolve_computed_by(entry.get("computed_by", ""))
-        except ValueError as err:
-            problems.append(f"claim {cid}: {err}")
-            continue
-        if not code.references(target):
-            problems.append(f"claim {cid}: computed_by {entry['computed_by']} is never called in the notebook")
+        for name, part in [(cid, entry)] + ([(f"{cid} (the simulated value beside it)", entry["beside"])]
+                                            if "beside" in entry else []):
+            if not part.get("note", "").strip():
+                problems.append(f"claim {name}: no note naming the computation")
+            try:
+                target = resolve_computed_by(part.get("computed_by", ""))
+            except ValueError as err:
+                problems.append(f"claim {name}: {err}")
+                continue
+            if not code.references(target):
+                problems.append(f"claim {name}: computed_by {part['computed_by']} is never called in the notebook")
     _report(stem, problems)
 
 

@@ -114,28 +114,46 @@ def _check_provenance(notebook, cid, entry):
         raise ValueError(f"notebook {notebook}, claim {cid!r}: {err}") from None
 
 
+def _beside(notebook, cid, basis, beside):
+    """The simulated value shown beside a row that is checked another way (:func:`write_results`)."""
+    if basis == "original-data":
+        raise ValueError(f"notebook {notebook}, claim {cid!r}: 'beside' is for a row checked another way (a thesis-numbers "
+                         "row whose number also needs the study's data); an original-data row's own value is the "
+                         "simulated one")
+    if not isinstance(beside, dict) or set(beside) != {"value", "computed_by", "note"}:
+        raise ValueError(f"notebook {notebook}, claim {cid!r}: 'beside' must be a dict with exactly 'value', "
+                         f"'computed_by' and 'note', got {beside!r}")
+    _check_provenance(notebook, f"{cid} (beside)", beside)
+    return {"value": _plain(beside["value"]), "note": str(beside["note"]), "computed_by": str(beside["computed_by"])}
+
+
 def write_results(notebook, claims, simulated=False):
     """Write ``<output folder>/results/<notebook>.json`` from ``{claim_id: entry}``.
 
     Each entry is a dict with ``value``, ``computed_by`` (the dotted name of the library function
     that computed the value, e.g. ``mutual.constraints.inference.greedy_inference``; the notebook
     calls it), ``note`` (the computation: what was compared, on what), optionally ``simulated``
-    (overriding the default for the whole notebook) and, for a ``computed`` claim, ``scan``: the
-    scan over what the thesis leaves open (:func:`mutual.compendium.claims.check_scan`). ``notebook`` is the notebook's file stem.
+    (overriding the default for the whole notebook), for a ``computed`` claim ``scan``: the
+    scan over what the thesis leaves open (:func:`mutual.compendium.claims.check_scan`), and
+    ``beside``: for a row whose verdict comes from another check (a number re-derived from the thesis's
+    own numbers) while the number itself needs the study's data, the value a SIMULATED study gives
+    (a dict of ``value``, ``computed_by`` and ``note``); it is shown beside the row, labelled, and never
+    decides its verdict (one number, one row). ``notebook`` is the notebook's file stem.
     Unknown claim ids and entries that do not name their computation raise a ValueError.
     """
-    known = set(load_claims()["id"])
+    claims_table = load_claims()
+    basis = dict(zip(claims_table["id"], claims_table["basis"]))
     entries = {}
     for cid, entry in sorted(claims.items()):
-        if cid not in known:
+        if cid not in basis:
             raise ValueError(f"claim id {cid!r} (from notebook {notebook!r}) is not in data/paper_claims.csv")
         if not isinstance(entry, dict):
             raise ValueError(f"notebook {notebook}, claim {cid!r}: the entry must be a dict with 'value', "
                              f"'computed_by' and 'note', got {entry!r}")
-        unknown = set(entry) - {"value", "simulated", "note", "computed_by", "scan"}
+        unknown = set(entry) - {"value", "simulated", "note", "computed_by", "scan", "beside"}
         if unknown or "value" not in entry:
             raise ValueError(f"notebook {notebook}, claim {cid!r}: entry needs 'value', 'computed_by' and 'note' "
-                             f"and may carry 'simulated' and 'scan', got {sorted(entry)}")
+                             f"and may carry 'simulated', 'scan' and 'beside', got {sorted(entry)}")
         _check_provenance(notebook, cid, entry)
         entries[cid] = {"value": _plain(entry["value"]),
                         "simulated": bool(entry.get("simulated", simulated)),
@@ -143,6 +161,8 @@ def write_results(notebook, claims, simulated=False):
                         "computed_by": str(entry["computed_by"])}
         if entry.get("scan") is not None:
             entries[cid]["scan"] = _plain_scan(cid, entry["scan"])
+        if entry.get("beside") is not None:
+            entries[cid]["beside"] = _beside(notebook, cid, basis[cid], entry["beside"])
     doc = {"notebook": notebook, "run": run_record(notebook), "claims": entries}
     return saved(write_text(results_dir() / f"{notebook}.json", json.dumps(doc, indent=1, sort_keys=True) + "\n"))
 

@@ -293,6 +293,26 @@ class ValueLibrary:
         return _interpolate(self.grid_spec, self.flat_values, states, fill_value)
 
 
+def boundary_values(value_fn, n_points=36, n_headings=72):
+    """V on the boundary of the keep-out disk, ``|p| = r`` (line 862: the zero level set and the boundary of H),
+    at ``n_points`` positions around it and ``n_headings`` headings at each: ``(values, approaching)``, arrays of
+    shape (n_points, n_headings) from ``value_fn.interp`` (exact for an exact value function). ``approaching``
+    marks the headings that point into the disk (``p . h < 0``); the headings sit half a step off the tangents,
+    so none is exactly tangent."""
+    if not isinstance(value_fn, ValueFunction):
+        raise ValueError(f"value_fn must be a ValueFunction, got {type(value_fn).__name__}")
+    for name, n in (("n_points", n_points), ("n_headings", n_headings)):
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 2:
+            raise ValueError(f"{name} must be an integer >= 2, got {n!r}")
+    around = 2 * np.pi * np.arange(n_points) / n_points
+    offset = np.tile(2 * np.pi * (np.arange(n_headings) + 0.5) / n_headings, n_points)  # from the outward normal
+    position = np.repeat(around, n_headings)
+    r = value_fn.obstacle_radius
+    states = np.stack([r * np.cos(position), r * np.sin(position), np.remainder(position + offset + np.pi, 2 * np.pi) - np.pi], 1)
+    shape = (n_points, n_headings)
+    return value_fn.interp(states).reshape(shape), (np.cos(offset) < 0).reshape(shape)
+
+
 def unsafe_set_contains(outer, inner, level=0.0):
     """Whether ``{V_inner < 0}`` lies inside ``{V_outer < level}`` at every grid node.
 
