@@ -1,0 +1,163 @@
+"""Section 6.5's multi-distractor QP and Figure 6.3: the active-set solver against Clarabel, the per-pair
+bounds against the end-point geometry they stand for, and the Lagrangian check."""
+
+import numpy as np
+import pytest
+
+from mutual.motion.legible import multigoal as mg
+from mutual.motion.legible import verify
+from mutual.motion.legible.objective import legible_trajectory
+from mutual.motion.legible.problem import double_integrator, reaching_cost, single_integrator
+from mutual.motion.legible.qp import multi_distractor_qp, receding_horizon_qp
+
+DT, N = 0.2, 40
+
+
+def _random_problem(rng, dyn):
+    goals = rng.uniform(-3, 3, size=(4, 2)) + [0, 4]
+    pad = np.zeros(dyn.n - 2)
+    costs = [reaching_cost(np.concatenate([g, pad]), DT, m=dyn.m) for g in goals]
+    x0 = np.zeros(dyn.n)
+    # bounds between the plain optimum's values and a little stricter, so that some bind and some do not
+    plain = multi_distractor_qp(dyn, costs[0], costs[1:], x0, N, 1e6, solver="active-set")
+    gaps = np.array([costs[0].value(plain[0], plain[1]) - J.value(plain[0], plain[1]) for J in costs[1:]])
+    return costs, x0, gaps - rng.uniform(-0.5, 1.5, size=3)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_active_set_solves_the_qp_clarabel_solves(seed):
+    rng = np.random.default_rng(seed)
+    for dyn in (single_integrator(2, DT), double_integrator(2, DT)):
+        costs, x0, etas = _random_problem(rng, dyn)
+        try:
+            ref = multi_distractor_qp(dyn, costs[0], costs[1:], x0, N, etas)
+        except ValueError as err:
+            with pytest.raises(ValueError, match="infeasible"):
+                multi_distractor_qp(dyn, costs[0], costs[1:], x0, N, etas, solver="active-set")
+            assert "infeasible" in str(err)
+            continue
+        xs, us, lam = multi_distractor_qp(dyn, costs[0], costs[1:], x0, N, etas, solver="active-set")
+        scale = np.abs(ref[1]).max()
+        np.testing.assert_allclose(us, ref[1], atol=1e-6 * scale)
+        np.testing.assert_allclose(xs, ref[0], atol=1e-6 * max(1.0, np.abs(ref[0]).max()))
+        np.testing.assert_allclose(lam, np.clip(ref[2], 0, None), atol=1e-5 * max(1.0, np.abs(ref[2]).max()))
+
+
+def test_active_set_refuses_what_it_cannot_solve():
+    dyn = single_integrator(2, DT)
+    J1, J0 = reaching_cost([1.0, 1.0], DT), reaching_cost([-1.0, 1.0], DT, effort_weight=0.5)
+    with pytest.raises(ValueError, match="needs affine constraints"):
+        multi_distractor_qp(dyn, J1, [J0], np.zeros(2), N, -1.0, solver="active-set")
+    goals = mg.row_goals()
+    costs = [reaching_cost(g, DT) for g in goals]
+    with pytest.raises(ValueError, match="infeasible"):          # the centre cannot beat both neighbours by 5
+        multi_distractor_qp(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), N, -5.0, solver="active-set")
+
+
+@pytest.mark.parametrize("omegas", [(0.5, -0.25), (-0.5, 0.5), (0.0, 0.0), (0.25, 0.25)])
+def test_side_bounds_put_every_line_of_a_side_at_its_offset(omegas):
+    """|x - g_j|^2 - |x - g_i|^2 = eta_i on the goals' row exactly at the side's offset from g_j."""
+    goals = mg.row_goals()
+    j, spacing = 1, 2.0
+    etas = mg.side_bounds(goals, j, *omegas)
+    others = np.delete(goals, j, 0)
+    for g, eta in zip(others, etas):
+        side = np.sign(g[0] - goals[j, 0])
+        omega = omegas[0] if side < 0 else omegas[1]
+        x = goals[j] + [side * omega * spacing, 0.0]
+        assert np.sum((x - goals[j]) ** 2) - np.sum((x - g) ** 2) == pytest.approx(eta, abs=1e-12)
+
+
+def test_one_qp_ends_at_the_unconstrained_end_clipped_to_the_slab():
+    """For x' = u the bounded optimum is the straight line to the unconstrained end point
+    (tau g + x0) / (1 + tau) moved into the slab [g - o_L, g + o_R] (a closed form derived by hand)."""
+    goals = mg.row_goals()
+    dyn, tau = single_integrator(2, DT), N * DT
+    costs = [reaching_cost(g, DT) for g in goals]
+    for j, wl, wr in [(1, 0.5, -0.25), (1, -0.5, 0.5), (2, 0.25, 0.25), (0, None, -1.0), (4, -0.5, None)]:
+        etas = mg.side_bounds(goals, j, wl, wr)
+        xs, _, _ = multi_distractor_qp(dyn, costs[j], costs[:j] + costs[j + 1:], np.zeros(2), N, etas,
+                                       solver="active-set")
+        free = tau * goals[j] / (1 + tau)
+        low = goals[j, 0] - (np.inf if wl is None else 2 * wl)
+        high = goals[j, 0] + (np.inf if wr is None else 2 * wr)
+        np.testing.assert_allclose(xs[-1], [np.clip(free[0], low, high), free[1]], atol=1e-9)
+        np.testing.assert_allclose(np.diff(xs, axis=0), np.diff(xs, axis=0)[:1].repeat(N, 0), atol=1e-9)
+
+
+def test_released_bounds_loosen_to_the_bisectors():
+    schedule = mg.released(np.array([-4.0, -8.0]), 0.5)
+    np.testing.assert_allclose(schedule(0.0), [-4.0, -8.0])
+    np.testing.assert_allclose(schedule(0.25), [-2.0, -4.0])
+    np.testing.assert_allclose(schedule(0.5), [0.0, 0.0])
+    np.testing.assert_allclose(schedule(0.9), [0.0, 0.0])
+
+
+def test_replans_record_how_far_the_bounds_move_the_plan():
+    goals = mg.row_goals()
+    slack = mg.goal_path(goals, 1, np.zeros(2), mg.side_bounds(goals, 1, 0.5, 0.5), 1.0, N=20, every=10)
+    assert all(np.allclose(r["end"], r["end_free"], atol=1e-9) and np.all(r["duals"] < 1e-9) for r in slack[2])
+    strict = mg.goal_path(goals, 1, np.zeros(2), mg.side_bounds(goals, 1, 0.5, -0.5), 1.0, N=20, every=10)
+    first = strict[2][0]
+    assert first["end"][0] == pytest.approx(-3.0) and first["duals"].max() > 0     # pinned to Lambda_1's bisector
+    assert mg.goal_measures(goals, 1, np.zeros(2), strict[0], strict[1], strict[2], 20.0)["binds"]
+    assert not mg.goal_measures(goals, 1, np.zeros(2), slack[0], slack[1], slack[2], 20.0)["binds"]
+
+
+def test_goal_cells_keep_only_feasible_pairs():
+    cells = mg.goal_cells(5, (0.5, 0.0, -1.0), (0.5, 0.25, 0.0, -0.25, -0.5))
+    assert sum(j == 0 for j, *_ in cells) == 3 and sum(j == 2 for j, *_ in cells) == 15
+    assert all(wl + wr >= 0 for j, wl, wr in cells if j in (1, 2, 3))
+    assert [c for c in cells if c[0] == 0] == [(0, None, 0.5), (0, None, 0.0), (0, None, -1.0)]
+
+
+def test_figure_63_verdicts_read_the_measures():
+    goals = mg.row_goals()
+    omegas = [(None, -2.0), (0.5, -0.5), (0.5, -0.25), (-0.5, 0.5), (-2.0, None)]
+    paths, plain, measures = mg.figure_63_paths(goals, np.zeros(2), omegas, 0.25, N=20, every=5)
+    assert list(measures["role"]) == ["far end", "interior", "centre", "interior", "far end"]
+    verdicts = mg.figure_63_verdicts(measures)
+    assert verdicts["exterior"] == bool((measures.loc[[0, 4], "outward excursion"] >= 0.1).all())
+    assert verdicts["centre"] == bool(measures.loc[2, "juke and anticipates"])
+    np.testing.assert_allclose(paths[0][:, 0], -paths[4][:, 0], atol=1e-9)     # mirror images
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: mg.side_bounds(mg.row_goals(), 1, None, 0.5), "needs a finite offset"),
+    (lambda: mg.released([-1.0], 0.0), "release must be a fraction"),
+    (lambda: mg.released([-1.0], 1.5), "release must be a fraction"),
+    (lambda: mg.uniform_bound_paths(mg.row_goals(), np.zeros(2), 0.5), "eta0 must be a negative"),
+])
+def test_bad_inputs_name_the_argument(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
+
+
+def test_lagrangian_check_holds_and_a_wrong_combination_fails():
+    """Section 6.5: the QP's solution is the Riccati LQR of (1 + sum l) J1 - sum l_i J0_i with its multipliers;
+    with other weights it is not (the check can fail)."""
+    r = 4 * np.sqrt(2)
+    goals = [r * np.array([np.cos(t), np.sin(t)]) for t in np.radians([45, 67.5, 90, 112.5, 135])]
+    dyn = single_integrator(2, DT)
+    costs = [reaching_cost(g, DT) for g in goals]
+    d = np.array([np.linalg.norm(goals[i] - goals[2]) for i in (0, 1, 3, 4)])
+    etas = -np.where(d < 1.01 * d.min(), 1.5, 1.0) * d ** 2
+    out = verify.multi_distractor_kkt(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), N, etas)
+    assert out["positive"] == 2 and out["active"] == 2
+    assert max(out[k] for k in ("solvers u", "solvers multipliers", "stationarity", "feasibility",
+                                "complementarity", "Lagrangian (Riccati) u")) < 1e-6
+    wrong = 1.5 * out["multipliers"]
+    us = legible_trajectory(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), N, wrong.sum(), weights=wrong).us
+    _, us_qp, _ = multi_distractor_qp(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), N, etas)
+    assert np.abs(us - us_qp).max() > 1e-3 * np.abs(us_qp).max()
+
+
+def test_receding_qp_takes_one_bound_per_distractor():
+    goals = mg.row_goals()
+    costs = [reaching_cost(g, DT) for g in goals]
+    dyn = single_integrator(2, DT)
+    etas = mg.side_bounds(goals, 1, 0.5, -0.25)
+    a = receding_horizon_qp(dyn, costs[1], [costs[0]] + costs[2:], np.zeros(2), N, lambda s: etas * (1 - s))
+    b = receding_horizon_qp(dyn, costs[1], [costs[0]] + costs[2:], np.zeros(2), N, lambda s: etas * (1 - s),
+                            solver="active-set")
+    np.testing.assert_allclose(a[0], b[0], atol=1e-6)
