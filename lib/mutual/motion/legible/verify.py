@@ -87,6 +87,16 @@ def _sequence_costs(hyp, us, xs):
     return stage + _discrete_cost(hyp, xs[:, -1], None)
 
 
+def exact_log_probabilities(hypotheses, T=8):
+    """``log P(u | H_i)`` (eqs. (6.8)-(6.9), partition functions as exact sums) of every one of the ``3^T``
+    control sequences of :func:`random_discrete_hypotheses`: an array (len(hypotheses), 3^T)."""
+    if not isinstance(T, (int, np.integer)) or not 1 <= T <= 10:
+        raise ValueError(f"T must be an integer from 1 to 10 (3^T sequences are listed), got {T!r}")
+    us, xs = _all_sequences(T)
+    costs = np.array([_sequence_costs(h, us, xs) for h in hypotheses])
+    return -costs - logsumexp(-costs, axis=1, keepdims=True)
+
+
 def lemma_641_exhaustive(hypotheses, T=8):
     """Lemma 6.4.1 for the robot that minimises ``J1 - J0`` (Theorem 6.4.2), checked on every one of the
     ``3^T`` control sequences of :func:`random_discrete_hypotheses`.
