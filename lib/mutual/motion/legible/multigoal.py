@@ -155,9 +155,8 @@ def goal_cells(n_goals, far_omegas, pair_omegas):
     return cells
 
 
-def figure_63_scan(heights, start_xs, far_omegas, pair_omegas, releases, horizon=20.0, N=100, every=10,
-                   goal_xs=GOAL_XS):
-    """One row per goal and cell of the scan (height x start x release x the goal's side offsets,
+def figure_63_scan(heights, start_xs, releases, cells, horizon=20.0, N=100, every=10, goal_xs=GOAL_XS):
+    """One row per goal and cell of the scan (height x start x release x the goals' side offsets ``cells``,
     :func:`goal_cells`) with :func:`goal_measures` and ``exaggerates`` (outward excursion >= 10%)."""
     rows = []
     for height in heights:
@@ -165,7 +164,7 @@ def figure_63_scan(heights, start_xs, far_omegas, pair_omegas, releases, horizon
         for start_x in start_xs:
             x0 = np.array([start_x, 0.0])
             for release in releases:
-                for j, wl, wr in goal_cells(len(goals), far_omegas, pair_omegas):
+                for j, wl, wr in cells:
                     xs, us, replans = goal_path(goals, j, x0, side_bounds(goals, j, wl, wr), release, horizon, N, every)
                     m = goal_measures(goals, j, x0, xs, us, replans, horizon)
                     rows.append({"goal": f"Lambda_{j + 1}", "role": role(j, len(goals)), "height": height,
@@ -173,6 +172,41 @@ def figure_63_scan(heights, start_xs, far_omegas, pair_omegas, releases, horizon
                                  "omega left": np.nan if wl is None else wl, "omega right": np.nan if wr is None else wr,
                                  **m, "exaggerates": bool(m["outward excursion"] >= 0.1)})
     return pd.DataFrame(rows)
+
+
+PASSES = {"far end": "exaggerates", "interior": "juke and anticipates", "centre": "juke and anticipates"}
+
+
+def best_cells(scan, fallback, height=4.0, start_x=0.0, releases=(0.5, 0.25, 1.0)):
+    """The figure closest to the caption among a scan's binding cells at ``height`` from ``start_x``: the
+    release under which the most goals have a passing cell (ties: the earlier in ``releases``), and for each
+    goal its passing cell with the loosest bounds (largest smaller offset, then the most symmetric), or its
+    ``fallback`` offsets when none passes. Returns ``(release, [(omega_left, omega_right)] per goal)``."""
+    here = scan[(scan["height"] == height) & (scan["start x"] == start_x) & scan["binds"]]
+    goals = sorted(set(scan["goal"]), key=lambda g: int(g.split("_")[1]))
+
+    def passing(release, goal):
+        rows = here[(here["release"] == release) & (here["goal"] == goal)]
+        return rows[rows[PASSES[rows["role"].iloc[0]]]] if len(rows) else rows
+    release = max(releases, key=lambda r: (sum(len(passing(r, g)) > 0 for g in goals), -releases.index(r)))
+    omegas = []
+    for goal, back in zip(goals, fallback):
+        rows = passing(release, goal)
+        if not len(rows):
+            omegas.append(back)
+            continue
+        w = rows[["omega left", "omega right"]].to_numpy()
+        low, spread = np.nanmin(w, axis=1), np.nan_to_num(np.abs(w[:, 0] - w[:, 1]))
+        best = rows.iloc[np.lexsort((spread, -low))[0]]
+        omegas.append(tuple(None if np.isnan(best[c]) else float(best[c]) for c in ("omega left", "omega right")))
+    return release, omegas
+
+
+def arc_goals(radius=4 * np.sqrt(2), bearings=(45.0, 67.5, 90.0, 112.5, 135.0)):
+    """Goals on an arc around the origin (bearings in degrees): equally far from the start, so their partition
+    functions are equal and ``J1 - J0_i`` is the observer's log likelihood ratio."""
+    b = np.radians(np.asarray(bearings, float))
+    return radius * np.c_[np.cos(b), np.sin(b)]
 
 
 def uniform_bound_paths(goals, x0, eta0, horizon=20.0, N=100, every=10):
