@@ -141,6 +141,58 @@ def figure_61_scan(effort_weights, keep_out_weights, alphas, steps=100):
     return pd.DataFrame(rows)
 
 
+def ring_starts(hazard, goal, radii=(2.0, 4.5), bearings=tuple(range(0, 360, 45)), turns=(0.0, np.pi / 2, -np.pi / 2),
+                min_goal_distance=2.5):
+    """Dubins start states around the hazard ``h``: positions ``h + rho (cos b, sin b)`` for each radius and
+    bearing (degrees), except those within ``min_goal_distance`` of the goal ``g``, each heading towards ``g``
+    turned by each of ``turns`` (radians, counter-clockwise). Returns an (S, 3) array of ``(x, y, theta)``."""
+    hazard, goal = np.asarray(hazard, float), np.asarray(goal, float)
+    starts = []
+    for rho in radii:
+        for b in np.radians(np.asarray(bearings, float)):
+            p = hazard + rho * np.array([np.cos(b), np.sin(b)])
+            if np.linalg.norm(goal - p) < min_goal_distance:
+                continue
+            towards = np.arctan2(*(goal - p)[::-1])
+            starts += [[p[0], p[1], towards + turn] for turn in turns]
+    return np.array(starts)
+
+
+def _best_from_rates(task, weights, turn_rates):
+    """The lowest-cost iLQR optimum over starts from constant turn rates (single solves: each compiles once)."""
+    best = None
+    for rate in turn_rates:
+        try:
+            r = es.solve(task, weights, us0=np.full((task.steps, task.controls), rate))
+        except ILQRError:
+            continue
+        best = r if best is None or r.cost < best.cost else best
+    return best
+
+
+def figure_72_start_scan(starts, kappas, steps=100, turn_rates=(0.0, 1.5, -1.5)):
+    """Fig. 7.2's H0 and H1 from each start state (x, y, theta) and horizon ``T = kappa |g - p0| / v`` (the
+    text's hazard): the best of iLQR runs from constant turn rates for each, H1's integral-distance gain over
+    H0 and whether H1 is "only slightly" farther (0 < gain < 5%). One row per (start, kappa)."""
+    base, w0, w1 = es.figure_scenario("7.2", steps=steps)
+    rows = []
+    for start in np.asarray(starts, float):
+        for kappa in kappas:
+            horizon = kappa * np.linalg.norm(base.goal - start[:2]) / base.speed
+            task = replace(base, x0=start, horizon=horizon)
+            h0, h1 = (_best_from_rates(task, w, turn_rates) for w in (w0, w1))
+            row = {"start x": start[0], "start y": start[1], "heading (deg)": float(np.degrees(start[2])),
+                   "kappa": float(kappa), "T (s)": horizon}
+            if h0 is None or h1 is None:
+                rows.append({**row, "H1 integral gain": np.nan, "H1 only slightly": False, "error": "iLQR did not converge"})
+                continue
+            d0, d1 = (distance_to_point(r.xs, task.hazard, task.dt) for r in (h0, h1))
+            gain = d1["integral"] / d0["integral"] - 1
+            rows.append({**row, "H0 closest": d0["min"], "H1 closest": d1["min"], "H1 integral gain": gain,
+                         "H1 only slightly": bool(0 < gain < H1_ONLY_SLIGHTLY), "error": ""})
+    return pd.DataFrame(rows)
+
+
 MPC_SCHEDULES = {"linear 1/4 -> 4": lambda: linear_alpha_schedule(0.25, 4.0),
                  "linear 1/2 -> 4": lambda: linear_alpha_schedule(0.5, 4.0),
                  "geometric 1/4 -> 4": lambda: geometric_alpha_schedule(0.25, 4.0)}
