@@ -161,3 +161,24 @@ def test_receding_qp_takes_one_bound_per_distractor():
     b = receding_horizon_qp(dyn, costs[1], [costs[0]] + costs[2:], np.zeros(2), N, lambda s: etas * (1 - s),
                             solver="active-set")
     np.testing.assert_allclose(a[0], b[0], atol=1e-6)
+
+
+def test_scan_rows_and_the_closest_figure():
+    """A two-cell scan per goal: rows carry the cell and the verdict columns; best_cells picks, per goal, a passing
+    binding cell when there is one (else the fallback), under the release where most goals pass."""
+    cells = mg.goal_cells(5, (-2.0, 0.5), (0.5, -0.5))
+    scan = mg.figure_63_scan((4.0,), (0.0,), (0.25,), cells, N=20, every=5)
+    assert len(scan) == len(cells) and set(mg.PASSES.values()) <= set(scan.columns)
+    slack = scan[(scan["role"] == "far end") & (scan["omega right"] == 0.5)]
+    assert not slack["binds"].any()                                   # a bound at the bisector never binds
+    fallback = [(None, 0.0), (0.5, 0.0), (0.5, 0.0), (0.0, 0.5), (0.0, None)]
+    release, omegas = mg.best_cells(scan, fallback, releases=(0.25,))
+    assert release == 0.25 and len(omegas) == 5
+    far = scan[(scan["goal"] == "Lambda_1") & scan["binds"] & scan["exaggerates"]]
+    assert omegas[0] == ((None, float(far["omega right"].iloc[0])) if len(far) else fallback[0])
+
+
+def test_arc_goals_are_equally_far_from_the_start():
+    goals = mg.arc_goals()
+    np.testing.assert_allclose(np.linalg.norm(goals, axis=1), 4 * np.sqrt(2))
+    np.testing.assert_allclose(goals[2], [0.0, 4 * np.sqrt(2)], atol=1e-12)
