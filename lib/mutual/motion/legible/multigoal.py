@@ -13,10 +13,13 @@ the end point to a slab set by the strictest bound on each side: :func:`side_bou
 ``eta_i`` of a slab given by its two side offsets, in units of the goal spacing (``omega``).
 """
 
+from functools import lru_cache
+
 import numpy as np
 import pandas as pd
 
-from ..observer import posterior_over_time
+from ..chain import lq_chains
+from ..observer import posterior_from_chains
 from .path_measures import juke, outward_excursion
 from .problem import reaching_cost, single_integrator, solve
 from .qp import receding_horizon_qp
@@ -78,13 +81,29 @@ def _binding(replans, goal, x0):
     return float(shift), int(sum(np.any(r["duals"] > 1e-9) for r in replans))
 
 
+@lru_cache(maxsize=64)
+def _observer(goals, x0, horizon, N):
+    """The eq. (6.8) observer's Gaussians over the goals and each goal's plain optimum (cached: a scan asks
+    for the same ones many times). ``goals`` and ``x0`` as tuples."""
+    dt = horizon / N
+    dyn, costs = single_integrator(2, dt), [reaching_cost(np.array(g), dt) for g in goals]
+    return lq_chains(dyn, costs, np.array(x0), N), [solve(dyn, c, np.array(x0), N) for c in costs]
+
+
+def _key(goals, x0):
+    return tuple(map(tuple, np.asarray(goals, float).tolist())), tuple(np.asarray(x0, float).tolist())
+
+
 def belief_at(goals, j, x0, us, horizon, at=ANTICIPATION_AT):
     """``P(goal j | u_{0:t})`` of the eq. (6.8) observer over the goals (uniform prior, exact prefix marginals)
     at ``t = at * horizon``."""
-    N = len(us)
-    dt = horizon / N
-    post = posterior_over_time(single_integrator(2, dt), [reaching_cost(g, dt) for g in goals], x0, us)
-    return float(post[int(round(at * N)), j])
+    chains, _ = _observer(*_key(goals, x0), float(horizon), len(us))
+    return float(posterior_from_chains(chains, np.asarray(us, float))[int(round(at * len(us))), j])
+
+
+@lru_cache(maxsize=256)
+def _plain_belief(goals, x0, j, horizon, N):
+    return belief_at(goals, j, x0, _observer(goals, x0, horizon, N)[1][j].us, horizon)
 
 
 def goal_measures(goals, j, x0, xs, us, replans, horizon):
@@ -93,9 +112,7 @@ def goal_measures(goals, j, x0, xs, us, replans, horizon):
     optimum) and how much the bounds bind."""
     goals, x0 = np.asarray(goals, float), np.asarray(x0, float)
     side = np.sign(goals[j, 0] - goals[:, 0].mean()) or 1.0
-    N = len(us)
-    plain = solve(single_integrator(2, horizon / N), reaching_cost(goals[j], horizon / N), x0, N)
-    belief, belief_plain = belief_at(goals, j, x0, us, horizon), belief_at(goals, j, x0, plain.us, horizon)
+    belief, belief_plain = belief_at(goals, j, x0, us, horizon), _plain_belief(*_key(goals, x0), j, float(horizon), len(us))
     shift, positive = _binding(replans, goals[j], x0)
     shape = juke(xs, goals[j])
     return {"outward excursion": outward_excursion(xs, goals[j], side), **shape,

@@ -89,9 +89,9 @@ def _blockwise_psd(blocks, tol):
     return low, low >= -tol * scale, scale
 
 
-def _solve(prob, solver, etas):
+def _solve(prob, solver, etas, options=None):
     try:
-        prob.solve(solver=solver)
+        prob.solve(solver=solver, **(options or {}))
     except cp.error.SolverError:
         raise ValueError(f"the multi-distractor QP for etas={etas.tolist()} defeated the solver {solver} (numerical "
                          "trouble: an eta at or near the smallest bound any motion meets, or costs of very different "
@@ -101,7 +101,8 @@ def _solve(prob, solver, etas):
         raise ValueError(f"the multi-distractor QP is {prob.status} for etas={etas.tolist()}{why}")
 
 
-def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL", tol=1e-9, formulation="sparse"):
+def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL", tol=1e-9, formulation="sparse",
+                        solver_options=None):
     """Solve ``min J1 s.t. J1 - J0_i <= eta_i`` for every distractor ``J0_i`` (section 6.5) in cvxpy.
 
     Each constraint is affine when the quadratic parts of ``J1`` and ``J0_i`` cancel (x' = u with
@@ -111,7 +112,7 @@ def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL
     after eliminating the dynamics) or ``"dense"`` (controls only). Returns ``(xs, us, duals)``;
     ``duals[i]`` is the multiplier of constraint i, so the solution minimises
     ``(1 + sum duals) J1 - sum duals_i J0_i`` (the Lagrangian). ``solver="active-set"``: see the module
-    docstring (affine constraints only; a ValueError otherwise).
+    docstring (affine constraints only; a ValueError otherwise). ``solver_options`` go to cvxpy's solve.
     """
     distractors, x0, etas = _check(dynamics, J1, distractors, x0, N, etas)
     if solver == "active-set":
@@ -119,10 +120,10 @@ def multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="CLARABEL
     if formulation not in ("sparse", "dense"):
         raise ValueError(f"formulation must be 'sparse' or 'dense', got {formulation!r}")
     if formulation == "sparse":
-        out = _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol)
+        out = _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol, solver_options)
         if out is not None:
             return out
-    return _dense_qp(dynamics, J1, distractors, x0, N, etas, solver, tol)
+    return _dense_qp(dynamics, J1, distractors, x0, N, etas, solver, tol, solver_options)
 
 
 def dynamics_constraints(dynamics, x0, N):
@@ -145,7 +146,7 @@ def stacked_cost(cost, N, n, m):
     return _stacked(cost, N, n, m)[:3]
 
 
-def _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol):
+def _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol, options=None):
     n, m = dynamics.n, dynamics.m
     nx = (N + 1) * n
     E, e = dynamics_constraints(dynamics, x0, N)
@@ -166,7 +167,7 @@ def _sparse_qp(dynamics, J1, distractors, x0, N, etas, solver, tol):
         else:
             return None                      # maybe convex in u only: let the dense form decide
     prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(z, cp.psd_wrap(P1)) + p1 @ z), cons)
-    _solve(prob, solver, etas)
+    _solve(prob, solver, etas, options)
     xs = z.value[:nx].reshape(N + 1, n)
     xs[0] = x0
     us = z.value[nx:].reshape(N, m)
@@ -228,13 +229,14 @@ def _dual_active_set(M, r, tol):
     return None
 
 
-def active_set_qp(dynamics, J1, distractors, x0, N, etas, tol=1e-9):
+def active_set_qp(dynamics, J1, distractors, x0, N, etas, tol=1e-9, free=False):
     """:func:`multi_distractor_qp` by an active set, for affine constraints ``J1 - J0_i <= eta_i``.
 
     The KKT system ``[P E'; E 0]`` of ``min J1`` under the dynamics ``E z = e`` (banded) is factored once;
     ``z(l) = z0 - W l`` for multipliers ``l``, so the constraints are ``r - M l <= 0`` with ``M = A W`` (k x k,
     symmetric positive semidefinite) and the multipliers solve that small complementarity problem
-    (:func:`_dual_active_set`). Returns ``(xs, us, duals)`` like :func:`multi_distractor_qp`."""
+    (:func:`_dual_active_set`). Returns ``(xs, us, duals)`` like :func:`multi_distractor_qp`, and with
+    ``free=True`` also the states of ``z0``, the plan without bounds."""
     distractors, x0, etas = _check(dynamics, J1, distractors, x0, N, etas)
     affine = affine_constraints(dynamics, J1, distractors, N)
     if affine is None:
@@ -259,10 +261,11 @@ def active_set_qp(dynamics, J1, distractors, x0, N, etas, tol=1e-9):
                          "J1 - J0_i <= eta_i for every distractor")
     z = z0 - W @ lam
     xs = z[:nx].reshape(N + 1, n)
-    return xs, z[nx:].reshape(N, m), lam
+    out = (xs, z[nx:].reshape(N, m), lam)
+    return out + (z0[:nx].reshape(N + 1, n),) if free else out
 
 
-def _dense_qp(dynamics, J1, distractors, x0, N, etas, solver, tol):
+def _dense_qp(dynamics, J1, distractors, x0, N, etas, solver, tol, options=None):
     H1, h1, c1 = lifted_cost(dynamics, J1, x0, N)
     u = cp.Variable(H1.shape[0])
     cons = []
@@ -280,7 +283,7 @@ def _dense_qp(dynamics, J1, distractors, x0, N, etas, solver, tol):
     if np.linalg.eigvalsh(H1)[0] < -tol * max(1.0, np.abs(H1).max()):
         raise ValueError("J1 is not convex in the controls, so min J1 is not a convex program")
     prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(u, cp.psd_wrap(H1)) + h1 @ u), cons)
-    _solve(prob, solver, etas)
+    _solve(prob, solver, etas, options)
     us = u.value.reshape(N, -1)
     free, G = lifted_dynamics(dynamics, x0, N)
     xs = free + G @ u.value
@@ -303,12 +306,15 @@ def receding_horizon_qp(dynamics, J1, distractors, x0, N, eta_of_s, every=10, so
     for start in range(0, N, every):
         rest = N - start
         dyn, cost = dynamics.stages(start, rest), J1.stages(start, rest)
-        etas = eta_of_s(start / N)
-        plan_x, plan_u, duals = multi_distractor_qp(dyn, cost, [J.stages(start, rest) for J in distractors],
-                                                    xs[-1], rest, etas, solver=solver)
+        etas, others = eta_of_s(start / N), [J.stages(start, rest) for J in distractors]
+        if solver == "active-set":
+            plan_x, plan_u, duals, free_x = active_set_qp(dyn, cost, others, xs[-1], rest, etas, free=True)
+        else:
+            plan_x, plan_u, duals = multi_distractor_qp(dyn, cost, others, xs[-1], rest, etas, solver=solver)
+            free_x = solve(dyn, cost, xs[-1], rest).xs if record else None
         if record:
             replans.append({"step": start, "etas": np.broadcast_to(np.asarray(etas, float), duals.shape).copy(),
-                            "duals": duals, "end": plan_x[-1], "end_free": solve(dyn, cost, xs[-1], rest).xs[-1]})
+                            "duals": duals, "end": plan_x[-1], "end_free": free_x[-1]})
         steps = min(every, rest)
         us.extend(plan_u[:steps])
         xs.extend(plan_x[1:steps + 1])

@@ -223,7 +223,8 @@ def bounded_legible_qp(dynamics, J1, J0, x0, N, alpha, bound, solver="CLARABEL")
 
 def multi_distractor_kkt(dynamics, J1, distractors, x0, N, etas):
     """Section 6.5 (line 1280): the QP ``min J1 s.t. J1 - J0_i <= eta_i`` reduces to the linear combination
-    ``(1 + sum l) J1 - sum l_i J0_i`` with its multipliers ``l``. The QP is solved by Clarabel (cvxpy) and by
+    ``(1 + sum l) J1 - sum l_i J0_i`` with its multipliers ``l``. The QP is solved by Clarabel (cvxpy, at the
+    tolerances of :data:`TIGHT`: its multipliers are compared, not only its controls) and by
     the active set of :mod:`.qp` (no cvxpy); the KKT conditions are checked by hand on Clarabel's answer
     (stationarity with the dynamics' multipliers fitted by least squares, primal and dual feasibility,
     complementary slackness); then the Riccati LQR of the combination, with either solver's multipliers
@@ -231,7 +232,7 @@ def multi_distractor_kkt(dynamics, J1, distractors, x0, N, etas):
     solution. Returns a dict of relative gaps and residuals, the multipliers, how many are positive and how
     many bounds are active."""
     distractors = list(distractors)
-    xs, us, lam = multi_distractor_qp(dynamics, J1, distractors, x0, N, etas)
+    xs, us, lam = multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver_options=TIGHT)
     lam = np.clip(lam, 0.0, None)                 # the interior point's -1e-12 are zeros
     _, us_b, lam_b = multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="active-set")
     n, m = dynamics.n, dynamics.m
