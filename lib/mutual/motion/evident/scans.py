@@ -14,6 +14,7 @@ from ..legible.objective import geometric_alpha_schedule, linear_alpha_schedule
 from ..trajopt import ILQRError
 from . import safety as es
 from .evidence import anticipates, close_but_clear, distance_to_point, obvious_avoidance
+from .task_belief import belief_over_time
 
 H1_ONLY_SLIGHTLY = 0.05   # Fig. 7.2: H1 "only slightly" farther: integral distance gain in (0, 5%)
 
@@ -190,6 +191,29 @@ def figure_72_start_scan(starts, kappas, steps=100, turn_rates=(0.0, 1.5, -1.5))
             gain = d1["integral"] / d0["integral"] - 1
             rows.append({**row, "H0 closest": d0["min"], "H1 closest": d1["min"], "H1 integral gain": gain,
                          "H1 only slightly": bool(0 < gain < H1_ONLY_SLIGHTLY), "error": ""})
+    return pd.DataFrame(rows)
+
+
+def belief_start_scan(figure, starts, horizons, alpha=0.5, steps=100):
+    """``P(H1 | motion to T/2)`` of the eq. (6.8) observer watching the legible path against watching H1's
+    optimum, for Fig. ``"7.1"`` or ``"7.2"`` from each start state and horizon (exact for Fig. 7.1, Laplace
+    around the optimal continuations for the car, :func:`.task_belief.belief_over_time`). One row per cell,
+    with whether the legible path shows the correction (a higher belief) and any solver error."""
+    base, w0, w1 = es.figure_scenario(figure, steps=steps)
+    times = np.array([0, steps // 2])
+    rows = []
+    for start in np.asarray(starts, float):
+        for horizon in horizons:
+            task = replace(base, x0=start, horizon=float(horizon))
+            row = {"figure": figure, "start": str(np.round(start, 2).tolist()), "T (s)": float(horizon)}
+            try:
+                paths = es.solve_hypotheses(task, w0, w1, alpha)
+                legible, h1 = (belief_over_time(task, w0, w1, paths[k].us, paths, times=times)[-1] for k in ("legible", "H1"))
+            except (ILQRError, ValueError) as err:
+                rows.append({**row, "shows the correction": False, "error": str(err)[:120]})
+                continue
+            rows.append({**row, "P(H1 | legible to T/2)": float(legible), "P(H1 | H1 optimum to T/2)": float(h1),
+                         "shows the correction": bool(legible > h1), "error": ""})
     return pd.DataFrame(rows)
 
 
