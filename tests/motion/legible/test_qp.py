@@ -8,7 +8,8 @@ import pytest
 
 from mutual.motion import legible as leg
 from mutual.motion.legible import double_integrator, legible_trajectory, qp, reaching_cost, single_integrator, solve
-from mutual.motion.legible.qp import multi_distractor_qp
+from mutual.motion.legible import multigoal as mg
+from mutual.motion.legible.qp import multi_distractor_qp, receding_horizon_qp
 
 
 DT, N = 0.01, 100
@@ -105,3 +106,60 @@ def test_bad_input_is_refused_with_a_clear_message(fn, args, kwargs, error, phra
     with pytest.raises(error) as info:
         fn(*args, **kwargs)
     assert phrase in str(info.value)
+
+
+# ---- the active set for affine bounds (Figure 6.3's solver) against Clarabel ----------------------------------
+
+AS_DT, AS_N = 0.2, 40
+
+
+def _random_problem(rng, dyn):
+    goals = rng.uniform(-3, 3, size=(4, 2)) + [0, 4]
+    pad = np.zeros(dyn.n - 2)
+    costs = [reaching_cost(np.concatenate([g, pad]), AS_DT, m=dyn.m) for g in goals]
+    x0 = np.zeros(dyn.n)
+    # bounds between the plain optimum's values and a little stricter, so that some bind and some do not
+    plain = multi_distractor_qp(dyn, costs[0], costs[1:], x0, AS_N, 1e6, solver="active-set")
+    gaps = np.array([costs[0].value(plain[0], plain[1]) - J.value(plain[0], plain[1]) for J in costs[1:]])
+    return costs, x0, gaps - rng.uniform(-0.5, 1.5, size=3)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_active_set_solves_the_qp_clarabel_solves(seed):
+    rng = np.random.default_rng(seed)
+    for dyn in (single_integrator(2, AS_DT), double_integrator(2, AS_DT)):
+        costs, x0, etas = _random_problem(rng, dyn)
+        try:
+            ref = multi_distractor_qp(dyn, costs[0], costs[1:], x0, AS_N, etas)
+        except ValueError as err:
+            with pytest.raises(ValueError, match="infeasible"):
+                multi_distractor_qp(dyn, costs[0], costs[1:], x0, AS_N, etas, solver="active-set")
+            assert "infeasible" in str(err)
+            continue
+        xs, us, lam = multi_distractor_qp(dyn, costs[0], costs[1:], x0, AS_N, etas, solver="active-set")
+        scale = np.abs(ref[1]).max()
+        np.testing.assert_allclose(us, ref[1], atol=1e-6 * scale)
+        np.testing.assert_allclose(xs, ref[0], atol=1e-6 * max(1.0, np.abs(ref[0]).max()))
+        np.testing.assert_allclose(lam, np.clip(ref[2], 0, None), atol=1e-5 * max(1.0, np.abs(ref[2]).max()))
+
+
+def test_active_set_refuses_what_it_cannot_solve():
+    dyn = single_integrator(2, AS_DT)
+    J1, J0 = reaching_cost([1.0, 1.0], AS_DT), reaching_cost([-1.0, 1.0], AS_DT, effort_weight=0.5)
+    with pytest.raises(ValueError, match="needs affine constraints"):
+        multi_distractor_qp(dyn, J1, [J0], np.zeros(2), AS_N, -1.0, solver="active-set")
+    goals = mg.row_goals()
+    costs = [reaching_cost(g, AS_DT) for g in goals]
+    with pytest.raises(ValueError, match="infeasible"):          # the centre cannot beat both neighbours by 5
+        multi_distractor_qp(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), AS_N, -5.0, solver="active-set")
+
+
+def test_receding_qp_takes_one_bound_per_distractor():
+    goals = mg.row_goals()
+    costs = [reaching_cost(g, AS_DT) for g in goals]
+    dyn = single_integrator(2, AS_DT)
+    etas = mg.side_bounds(goals, 1, 0.5, -0.25)
+    a = receding_horizon_qp(dyn, costs[1], [costs[0]] + costs[2:], np.zeros(2), AS_N, lambda s: etas * (1 - s))
+    b = receding_horizon_qp(dyn, costs[1], [costs[0]] + costs[2:], np.zeros(2), AS_N, lambda s: etas * (1 - s),
+                            solver="active-set")
+    np.testing.assert_allclose(a[0], b[0], atol=1e-6)

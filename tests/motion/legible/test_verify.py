@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 
 from mutual.motion.legible import LinearDynamics, QuadraticCost, legible_trajectory, solve
+from mutual.motion.legible import reaching_cost, single_integrator, verify
+from mutual.motion.legible.qp import multi_distractor_qp
 from mutual.motion.observer import likelihood_ratio_minimiser
 
 
@@ -81,3 +83,25 @@ def test_suboptimality_multiplier_is_the_alpha_that_spends_the_bound(reference):
     assert out["multiplier"] == pytest.approx(brentq(spend, 0.1, 100.0, xtol=1e-12), rel=1e-4)
     with pytest.raises(ValueError, match="epsilon must be a positive"):
         verify.suboptimality_multiplier(dyn, J1, J0, X0, N, 0.0)
+
+
+AS_DT, AS_N = 0.2, 40                       # the section 6.5 check below
+
+
+def test_lagrangian_check_holds_and_a_wrong_combination_fails():
+    """Section 6.5: the QP's solution is the Riccati LQR of (1 + sum l) J1 - sum l_i J0_i with its multipliers;
+    with other weights it is not (the check can fail)."""
+    r = 4 * np.sqrt(2)
+    goals = [r * np.array([np.cos(t), np.sin(t)]) for t in np.radians([45, 67.5, 90, 112.5, 135])]
+    dyn = single_integrator(2, AS_DT)
+    costs = [reaching_cost(g, AS_DT) for g in goals]
+    d = np.array([np.linalg.norm(goals[i] - goals[2]) for i in (0, 1, 3, 4)])
+    etas = -np.where(d < 1.01 * d.min(), 1.5, 1.0) * d ** 2
+    out = verify.multi_distractor_kkt(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), AS_N, etas)
+    assert out["positive"] == 2 and out["active"] == 2
+    assert max(out[k] for k in ("solvers u", "solvers multipliers", "stationarity", "feasibility",
+                                "complementarity", "Lagrangian (Riccati) u")) < 1e-6
+    wrong = 1.5 * out["multipliers"]
+    us = legible_trajectory(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), AS_N, wrong.sum(), weights=wrong).us
+    _, us_qp, _ = multi_distractor_qp(dyn, costs[2], costs[:2] + costs[3:], np.zeros(2), AS_N, etas)
+    assert np.abs(us - us_qp).max() > 1e-3 * np.abs(us_qp).max()
