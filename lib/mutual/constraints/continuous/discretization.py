@@ -131,7 +131,8 @@ def discretize(problem, scheduler="auto", workers=None, progress=False):
     ``scheduler``: "inline" (this process), "auto" (inline for small problems -- fewer than
     ``DASK_THRESHOLD`` integrations -- else as below), None (Dask: ``$MUTUAL_DASK_SCHEDULER`` or
     an embedded LocalCluster of ``workers`` processes) or the address of a running Dask scheduler.
-    The result does not depend on where it ran (the chunks and their seeds are fixed).
+    The result does not depend on where it ran (the chunks and their seeds are fixed). ``progress``: a
+    tqdm bar when True, or a function ``progress(done, total)`` called after each chunk (in this process).
     """
     tasks = chunks(problem.grid.n_cells)
     if scheduler == "auto":
@@ -140,7 +141,7 @@ def discretize(problem, scheduler="auto", workers=None, progress=False):
         parts = [chunk_transitions(task, problem) for task in _progress(tasks, progress)]
     else:
         parts = map_tasks(chunk_transitions, tasks, shared=(problem,), scheduler=scheduler, workers=workers,
-                          progress=progress, desc="discretizing")
+                          progress=bool(progress), desc="discretizing")
     rows, cols, probs = (np.concatenate(p) for p in zip(*parts))
     X, A = problem.grid.n_cells, problem.n_actions
     S = sp.csr_matrix((probs, (rows, cols)), shape=(X * A, X))
@@ -150,7 +151,15 @@ def discretize(problem, scheduler="auto", workers=None, progress=False):
 
 
 def _progress(tasks, progress):
+    if callable(progress):
+        return _reporting(tasks, progress)
     if not progress:
         return tasks
     from tqdm.auto import tqdm
     return tqdm(tasks, desc="discretizing")
+
+
+def _reporting(tasks, progress):
+    for done, task in enumerate(tasks, start=1):
+        yield task
+        progress(done, len(tasks))
