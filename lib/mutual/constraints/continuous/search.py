@@ -11,7 +11,11 @@ own units and with no grid in the way:
 * **disks** and **boxes** in a plane -- for a given centre, the largest one no demonstration enters
   (radius = the distance from the centre to the demonstrations' path, a square box's half-width = the
   max-norm distance), capped at ``largest``; the centre is then searched: every lattice point of the
-  plane, and a finer lattice around the best, twice.
+  plane, and a finer lattice around the best, twice. An obstacle is only identifiable where the
+  demonstrations pass it on more than one side: if every path point that touches it (within
+  ``TOUCH`` of its size) lies in one half-plane through its centre, a larger obstacle farther away would be
+  consistent too and more likely -- the data say "that side is empty", not where an obstacle is -- so
+  such a centre is no candidate (this is where phantom obstacles beside the demonstrations come from).
 
 The demonstrations' path is their recorded samples joined by straight segments, checked at
 ``PATH_POINTS`` points per segment (the same check :func:`.pointwise.blocked` applies to the model's moves).
@@ -24,6 +28,7 @@ from .regions import Box, Bound, Disk
 PATH_POINTS = 4          # points per recorded segment at which obstacles are checked (ends included)
 LATTICE = 11             # centres per coordinate of the plane in the first search
 REFINE = (5, 2)          # a 5 x 5 lattice around the best centre, this many times, each finer by 2.5
+TOUCH = 0.5              # path points within this share of an obstacle's size of its boundary touch it
 
 
 def path_points(paths):
@@ -52,17 +57,28 @@ def tightest_bounds(grid, samples, skip=()):
 
 def largest_obstacles(kind, plane, centres, path, largest, smallest):
     """The largest ``kind`` ("disk" or "box") at each centre (K, 2) that the ``path`` (n, d) never enters,
-    capped at ``largest``; centres that allow less than ``smallest`` are dropped."""
+    capped at ``largest``; centres that allow less than ``smallest``, or whose obstacle the path touches
+    from one side only (module docstring), are dropped."""
     xy = path[:, list(plane)]
     out = []
     for c in np.atleast_2d(centres):
         d = xy - c
-        size = np.sqrt((d ** 2).sum(axis=1)).min() if kind == "disk" else np.abs(d).max(axis=1).min()
-        size = min(float(size), largest) * (1 - 1e-9)
-        if size >= smallest:
+        dist = np.sqrt((d ** 2).sum(axis=1)) if kind == "disk" else np.abs(d).max(axis=1)
+        size = min(float(dist.min()), largest) * (1 - 1e-9)
+        if size >= smallest and size < largest * (1 - 1e-6) and enclosed(d[dist <= size * (1 + TOUCH)]):
             out.append(Disk(tuple(plane), (float(c[0]), float(c[1])), size) if kind == "disk" else
                        Box(tuple(plane), (float(c[0] - size), float(c[1] - size)), (float(c[0] + size), float(c[1] + size))))
     return out
+
+
+def enclosed(directions):
+    """Whether vectors (n, 2) from a centre do not all lie in one half-plane through it (the largest
+    angular gap between them is below pi)."""
+    if len(directions) < 2:
+        return False
+    angles = np.sort(np.arctan2(directions[:, 1], directions[:, 0]))
+    gaps = np.diff(np.r_[angles, angles[0] + 2 * np.pi])
+    return bool(gaps.max() < np.pi)
 
 
 def centre_of(region):
