@@ -47,6 +47,19 @@ class CellInference:
         chosen = "; ".join(self.candidates.label(k) for k in self.result.chosen) or "none"
         return f"CellInference({len(self.result.chosen)} chosen: {chosen}; stopped by {self.result.stop})"
 
+    @property
+    def states(self):
+        """The aligned demonstrations (N, L+1, d)."""
+        return self.mapped.states
+
+    @property
+    def stop(self):
+        return self.result.stop
+
+    def labels(self):
+        """The chosen constraints in words, in order."""
+        return [self.candidates.label(k) for k in self.result.chosen]
+
     def chosen_regions(self):
         """The regions (or None for cells) chosen, in order."""
         return [self.candidates.regions[k] for k in self.result.chosen]

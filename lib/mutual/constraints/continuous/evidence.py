@@ -128,34 +128,3 @@ def fit_temperature(model, data, regions, around, width=TEMPERATURE_RANGE):
     ll, logZ = cache[u] if u in cache else log_likelihood(model, data, regions, math.exp(u))
     edge = min(u - lo, hi - u) < 3 * TEMPERATURE_TOLERANCE
     return math.exp(u), ll, logZ, bool(edge)
-
-
-def most_likely_paths(model, data, regions, logZ, temperature):
-    """From every demonstrated start, the path of the most likely control at each step under ``regions``
-    (argmax_a Phi_C exp(r dt/tau) Z_{C,t+1}(f(s, a)), one exact step ahead of the grid), for as many steps
-    as the demonstrations span: (N, L+1, d)."""
-    p = model.problem
-    cell_ok = pw.points_allowed(model, regions).any(axis=1)
-    x = data.states[:, 0]
-    path = [x]
-    for t in range(data.steps):
-        moves = pw.point_moves(p, x)
-        q = np.where(pw.allowed_moves(regions, moves), moves.reward / temperature, -np.inf) + \
-            pw.successor_log_values(moves, logZ[t + 1], cell_ok)
-        best = q.reshape(len(x), -1).argmax(axis=1)
-        x = moves.successor.reshape(len(x), p.n_actions, -1)[np.arange(len(x)), best]
-        path.append(x)
-    return np.stack(path, axis=1)
-
-
-def violated_by(region, paths, depth=0.0):
-    """The share of ``paths`` (N, L+1, d) that enter ``region`` (at a state, or on a segment for obstacles)
-    more than ``depth`` deep (the region loosened by ``depth`` in its units; none if nothing is left)."""
-    N, L1, d = paths.shape
-    if depth > 0:
-        from .search import size_of
-        if region.kind != "bound" and size_of(region) <= depth:
-            return 0.0
-        region = region.inflated(-depth)
-    hit = pw.blocked(region, paths[:, :-1].reshape(-1, d), paths[:, 1:].reshape(-1, d)).reshape(N, L1 - 1)
-    return float(hit.any(axis=1).mean())

@@ -12,22 +12,18 @@
    bound per coordinate and side, the largest consistent disk or box at the best centre) and scores
    each by its exact log-likelihood gain; the best is scored again with the temperature refitted under it
    (the likelihood ratio with the temperature profiled out);
-5. **relevance**: only constraints the task pushes against can be identified (Fig. 3.3). A candidate
-   counts only if the most likely path under the constraints found so far (the argmax control at every
-   step, :func:`.evidence.most_likely_paths`) violates it from at least ``RELEVANT`` of the demonstrated
-   starts. A region that the most likely behaviour already avoids can explain only the demonstrator's
-   *variability* -- where a Boltzmann model of a hand-written controller is least right (it is far more
-   variable than the controller), and where regions no demonstration entered would otherwise pass for
-   obstacles (phantoms beside the demonstrations' tube);
-6. **stop rule**: the best relevant candidate is accepted only if its gain is at least ``min_gain`` nats per
-   demonstration *and* log(K / ALPHA) nats in all (K: the candidates scored in the round). The second term
-   is chance: without a constraint, and with the model right, the total gain of the tightest consistent
-   member of a one-parameter family is exponentially distributed with mean 1 (the demonstrations' extreme
-   is a maximum of independent draws), so K families exceed log(K / ALPHA) with probability <= ALPHA. The
-   first asks each demonstration to be e^MIN_GAIN times more likely: a relevant constraint is crossed by
-   the most likely path from half the starts, so the model's own mass beyond it is of order one half per
-   demonstration (log 2 = 0.69 nats); ``MIN_GAIN = 0.5`` asks for most of that;
-7. each accepted constraint gets a likelihood interval: the values of its parameter (a bound's value, an
+5. **stop rule**: the best candidate is accepted only if its gain is at least ``min_gain`` nats per
+   demonstration *and* log(K / ALPHA) nats in all (K: the candidates scored in the round). The first is
+   task relevance (Fig. 3.3: only constraints relevant to the task can be identified): with the gain
+   -log F per demonstration above ``MIN_GAIN = log 2``, more than half of the model's trajectories from
+   the demonstrated starts (geometric mean) would cross the constraint -- the *typical* unconstrained
+   behaviour violates it, not only its tail. Regions that only the tail of a Boltzmann model enters are
+   where a hand-written controller, far less variable than the model, differs from it most (a bound just
+   past its goal, the space beside its path). The second is chance: without a constraint, and with the
+   model right, the total gain of the tightest consistent member of a one-parameter family is
+   exponentially distributed with mean 1 (the demonstrations' extreme is a maximum of independent draws),
+   so K families exceed log(K / ALPHA) with probability <= ALPHA;
+6. each accepted constraint gets a likelihood interval: the values of its parameter (a bound's value, an
    obstacle's size) whose likelihood is within a factor 1/ALPHA of the best. Under the model the true
    value lies in it with probability 1 - ALPHA (the likelihood ratio of the truth against the tightest
    consistent value is again exponential with mean 1).
@@ -47,8 +43,7 @@ from . import search
 from .pointwise import point_model
 from .regions import Bound, boundary_distance
 
-MIN_GAIN = 0.5      # nats per demonstration (module docstring)
-RELEVANT = 0.25     # the share of the demonstrated starts whose most likely path must violate a candidate
+MIN_GAIN = math.log(2)   # nats per demonstration: the median unconstrained trajectory crosses it (docstring)
 ALPHA = 0.05        # chance of a false constraint per round; 1 - ALPHA: the interval's coverage
 FAMILIES = ("bound", "disk", "box")
 _PROFILE = np.array([0.0, 0.001, 0.003, 0.01, 0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0])
@@ -83,6 +78,10 @@ class ContinuousInference:
         """The accepted regions, in order."""
         return [a["region"] for a in self.accepted]
 
+    def labels(self):
+        """The accepted constraints in words, in order."""
+        return [a["constraint"] for a in self.accepted]
+
     def ranking(self, top=None):
         """Every candidate of every round (best gain first): round, rank, kind, the constraint in its units,
         its numbers, the exact gain in all and per demonstration, F, the margin it needed, accepted."""
@@ -109,57 +108,38 @@ class ContinuousInference:
 
 
 def _round_table(number, scored, grid, n_demos, needed, accepted, refitted, chosen=None):
-    """One row per candidate of a round (most likely first): its gain, the share of most likely paths that
-    violate it (``relevance``); the best relevant one also carries its gain with the temperature refitted
-    under it (``gain_refit``: what the stop rule compares with ``needed``)."""
+    """One row per candidate of a round (most likely first); the best also carries its gain with the
+    temperature refitted under it (``gain_refit``: what the stop rule compares with ``needed``)."""
     rows = []
     order = sorted(range(len(scored)), key=lambda k: -np.nan_to_num(scored[k][1], nan=-np.inf, neginf=-np.inf))
     for rank, k in enumerate(order, start=1):
-        region, gain, relevance = scored[k]
+        region, gain = scored[k]
         top = region is chosen
         rows.append({"round": number, "rank": rank, "kind": region.kind, "constraint": region.describe(grid),
                      **region.fields(grid), "gain": gain, "gain_per_demo": gain / n_demos,
-                     "F": math.exp(-gain / n_demos) if np.isfinite(gain) else math.nan, "relevance": relevance,
+                     "F": math.exp(-gain / n_demos) if np.isfinite(gain) else math.nan,
                      "gain_refit": refitted if top else math.nan, "needed": needed, "accepted": bool(accepted and top)})
     return pd.DataFrame(rows)
 
 
 def _candidates(model, data, logZ, regions, families, plane, tau, sizes):
-    """[(region, total gain, relevance)] of the round's proposals and the number of regions scored;
-    irrelevant obstacles are not scored (gain -inf), irrelevant bounds are scored and shown."""
+    """[(region, total gain)] of the round's proposals and the number of regions scored."""
     grid = model.problem.grid
-    mode = ev.most_likely_paths(model, data, regions, logZ, tau)
-    relevance = lambda cands: np.array([ev.violated_by(c, mode, _cell(grid, c)) for c in cands])   # noqa: E731
-
-    def score(cands, only_relevant=False):
-        rel = relevance(cands)
-        gains = np.full(len(cands), -np.inf)
-        use = np.flatnonzero(rel >= RELEVANT) if only_relevant else np.arange(len(cands))
-        if use.size:
-            gains[use] = ev.candidate_gains(model, data, logZ, regions, [cands[k] for k in use], tau)
-        return gains, rel
-
+    score = lambda cands: ev.candidate_gains(model, data, logZ, regions, cands, tau)   # noqa: E731
     scored, tried = [], 0
     if "bound" in families:
         skip = {(r.dim, r.side) for r in regions if isinstance(r, Bound)}
         bounds = search.tightest_bounds(grid, data.samples, skip)
-        gains, rel = score(bounds)
-        scored += list(zip(bounds, gains, rel))
+        scored += list(zip(bounds, score(bounds)))
         tried += len(bounds)
     for kind in ("disk", "box"):
         if kind in families:
-            best, gain, n = search.search_obstacle(kind, plane, grid, data.path, lambda c: score(c, True)[0],
-                                                   sizes.get("largest"), sizes.get("smallest"))
+            best, gain, n = search.search_obstacle(kind, plane, grid, data.path, score, sizes.get("largest"),
+                                                   sizes.get("smallest"))
             tried += n
             if best is not None:
-                scored.append((best, gain, float(relevance([best])[0])))
+                scored.append((best, gain))
     return scored, tried
-
-
-def _cell(grid, region):
-    """The grid's resolution in ``region``'s units: its coordinate's (or plane's) largest cell width."""
-    dims = [region.dim] if isinstance(region, Bound) else list(region.dims)
-    return max(float(grid.widths_1d(i).max()) for i in dims)
 
 
 def likelihood_interval(model, data, logZ, regions, region, gain, tau, alpha=ALPHA):
@@ -233,7 +213,7 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
     for number in range(1, rounds + 1):
         temps.append(tau)
         scored, tried = _candidates(pm, data, logZ, regions, families, plane, tau, sizes)
-        finite = [s for s in scored if np.isfinite(s[1]) and s[2] >= RELEVANT]
+        finite = [s for s in scored if np.isfinite(s[1])]
         if not finite:
             tables.append(_round_table(number, scored, problem.grid, data.n, math.nan, False, math.nan))
             stop = "no candidate"
