@@ -135,9 +135,7 @@ def _check_options(args):
     for name, value, low in (("--rounds", args.rounds, 1), ("--top", args.top, 1)):
         if value < low:
             raise common.InputError(f"{name} {value}: must be at least {low}")
-    if args.min_gain is None:
-        args.min_gain = MIN_GAIN[args.model]
-    if not math.isfinite(args.min_gain) or args.min_gain < 0:
+    if args.min_gain is not None and (not math.isfinite(args.min_gain) or args.min_gain < 0):
         raise common.InputError(f"--min-gain {args.min_gain}: must be a finite number >= 0")
     if args.workers is not None and args.workers < 1:
         raise common.InputError(f"--workers {args.workers}: must be at least 1")
@@ -195,9 +193,9 @@ def run_infer_continuous(args):
             bar.set_postfix_str(detail[:60])
 
         with common.about(traj_path):
-            run = infer(problem, recording, families=families, rounds=args.rounds, min_gain=args.min_gain,
-                        truncate=args.truncate, progress=progress, plane=spec.candidates["plane"],
-                        **_model_options(args, spec, problem))
+            gain = {} if args.min_gain is None else {"min_gain": args.min_gain}
+            run = infer(problem, recording, families=families, rounds=args.rounds, truncate=args.truncate,
+                        progress=progress, plane=spec.candidates["plane"], **gain, **_model_options(args, spec, problem))
         bar.update(100 - bar.n)
     from .continuous_report import report_inference
     report_inference(args, run, traj_path, system_path)

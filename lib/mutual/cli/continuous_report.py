@@ -18,7 +18,7 @@ def report_inference(args, run, traj_path, system_path):
     results = {"command": "constraints infer-continuous", "input": str(traj_path), "system": str(system_path),
                "model": args.model, "dynamics": problem.system.spec, "dt": problem.dt,
                "cells": list(problem.grid.shape), "n_states": problem.grid.n_cells, "n_controls": problem.n_actions,
-               "scheme": problem.scheme, "rounds": args.rounds, "min_gain": args.min_gain,
+               "scheme": problem.scheme, "rounds": args.rounds,
                "stopped": run.stop, "chosen": chosen.to_dict(orient="records"),
                "ranking": [t.head(args.top).to_dict(orient="records") for t in _round_tables(run, table)],
                "seconds": run.seconds, "outputs": {k: str(v) for k, v in outputs.items()}}
@@ -90,7 +90,7 @@ def _summary_cells(r, notes):
                          f"{row['neg_log_F']:>9.4f}{row['exact_gain']:>12.4f}{mark}")
         lines.append("")
     why = {"rounds": f"--rounds {r['rounds']} reached",
-           "min_gain": f"the best remaining constraint gains less than --min-gain {r['min_gain']:g} nats per demonstration",
+           "min_gain": "the best remaining constraint gains less than --min-gain nats per demonstration",
            "no feasible candidate": "no feasible candidate left"}[r["stopped"]]
     lines.append(f"Stopped: {why}. Chosen constraints ({len(r['chosen'])}):")
     for row in r["chosen"]:

@@ -89,18 +89,23 @@ def _expected_successor(S, grid, reference):
 
 
 def summary(run, truth):
-    """One row about an inference against the ``truth`` regions: the chosen constraints, F of the first,
-    whether the first is of the truth's kind and on its coordinates, the boundary error(s)
-    (:func:`.inference.boundary_errors`), thresholds Lemma 3.2.1 raised, steps S gave probability 0."""
+    """One row about an inference (either model) against the ``truth`` regions: the chosen constraints, F
+    of the first, whether the first is of the truth's kind and on its coordinates, the boundary error(s)
+    (:func:`.inference.boundary_errors`); the points model adds the first one's likelihood interval, the
+    cells model the thresholds Lemma 3.2.1 raised and the steps S gave probability 0."""
     errors = boundary_errors(run, truth)
     regions = run.chosen_regions()
     first = regions[0] if regions else None
     first_error = boundary_distance(first, truth[0]) if first is not None and truth else math.nan
-    return {"chosen": "; ".join(run.candidates.label(k) for k in run.result.chosen) or "none",
-            "F of the first": float(run.result.F[0]) if regions else math.nan,
-            "first is the true kind": bool(np.isfinite(first_error)),
-            **{("error" if len(truth) == 1 else f"error {n}"): e for n, e in enumerate(errors)},
-            "thresholds raised": run.candidates.raised, "zero-probability steps": run.mapped.added}
+    row = {"chosen": "; ".join(run.labels()) or "none",
+           "first is the true kind": bool(np.isfinite(first_error)),
+           **{("error" if len(truth) == 1 else f"error {n}"): e for n, e in enumerate(errors)}}
+    if hasattr(run, "candidates"):
+        return {**row, "F of the first": float(run.result.F[0]) if regions else math.nan,
+                "thresholds raised": run.candidates.raised, "zero-probability steps": run.mapped.added}
+    interval = run.accepted[0]["interval"] if regions else (math.nan, math.nan)
+    return {**row, "F of the first": math.exp(-run.accepted[0]["gain"] / run.data.n) if regions else math.nan,
+            "interval of the first": f"[{interval[0]:.4g}, {interval[1]:.4g}]" if regions else "none"}
 
 
 def resolution_sweep(problem, recording, resolutions, truth, schemes=("sample", "barycentric"), **options):
@@ -183,8 +188,9 @@ def timed_inference(problem, recording, truth=(), **options):
     ``truth``."""
     import mutual  # noqa: F401  (the XLA setting, as in the parent)
     run = infer(problem, recording, **options)
+    scored = len(run.candidates) if hasattr(run, "candidates") else sum(len(t) for t in run.rounds)
     return {"cells": problem.grid.n_cells, **{f"{k} s": v for k, v in run.seconds.items()},
-            "candidates": len(run.candidates), **summary(run, list(truth)), "regions": run.chosen_regions()}
+            "candidates": scored, **summary(run, list(truth)), "regions": run.chosen_regions()}
 
 
 def idle_memory(fresh=True):

@@ -264,7 +264,8 @@ def satisfaction(model, logZ, regions, candidates, temperature, times):
     if not mv.one_entry:
         extra = extra * _lambda_ratio(mv, cell_ok, cell_ok_plus)
     w = np.where(ok, model.terminal / temperature, -np.inf)
-    share = np.exp(w - logZ[-1][:, None] - _log(ok.sum(axis=1))[:, None])
+    with np.errstate(invalid="ignore"):
+        share = np.exp(w - logZ[-1][:, None] - _log(ok.sum(axis=1))[:, None])
     share[~np.isfinite(share)] = 0.0
     F = np.einsum("xm,xmk->xk", share, ok_plus) * n_ratio
     out = {model.horizon: F} if model.horizon in times else {}
