@@ -19,7 +19,7 @@ from .mapping import _infer, check_box
 from .recordings import align
 
 TEMPERATURE_RANGE = 100.0   # the fitted temperature is searched within [tau / 100, tau * 100] of the file's
-TEMPERATURE_TOLERANCE = 0.02   # in log tau
+TEMPERATURE_TOLERANCE = 0.05   # in log tau: the fitted temperature within 5 %
 
 
 @dataclass(frozen=True, eq=False)

@@ -219,7 +219,7 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
             stop = "no candidate"
             break
         best = max(finite, key=lambda s: s[1])
-        refit = _temperature(pm, data, regions + [best[0]], temperature, tau, width=10.0)
+        refit = _temperature(pm, data, regions + [best[0]], temperature, tau, width=3.0)
         gain = refit[1] - ll                                   # the exact gain, the temperature refitted
         needed = max(min_gain * data.n, math.log(max(tried, 1) / ALPHA))
         ok = gain >= needed

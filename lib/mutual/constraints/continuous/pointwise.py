@@ -39,7 +39,6 @@ At continuous points (the demonstrations' starts and ends) the values are one ex
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .discretization import kuhn_weights
 
@@ -48,63 +47,52 @@ SEGMENT_POINTS = 3      # interior points at which a move's straight segment is 
 
 @dataclass(frozen=True, eq=False)
 class Moves:
-    """One step of ``dt`` from points under every control: ``owner`` (P,) the cell (or point) each move
-    starts from, ``point`` and ``successor`` (P, d), ``reward`` (P,) r(point, u) dt (not tempered), and the
-    successor on the grid as entries: ``move`` (E,) their move, ``target`` (E,) a cell, ``log_weight`` (E,)
-    (the sample's share log(1/M), or the log barycentric weight)."""
+    """One step of ``dt`` from points under every control, ``fan`` moves per owner (a cell's samples times
+    the controls, or a point's controls), owner by owner: ``point`` and ``successor`` (P, d), ``reward``
+    (P,) r(point, u) dt (not tempered), and the successor on the grid: ``target`` (P, k) cells with
+    ``log_weight`` (P, k) (k = 1: its cell, log 1; barycentric: the d + 1 vertices and log weights)."""
 
-    owner: np.ndarray
     point: np.ndarray
     successor: np.ndarray
     reward: np.ndarray
-    move: np.ndarray
     target: np.ndarray
     log_weight: np.ndarray
+    fan: int
 
     @property
     def n_moves(self):
-        return self.owner.size
+        return self.reward.size
 
     @property
-    def one_entry(self):
-        """Each move's successor is one cell (the sample scheme): no interpolation to sum."""
-        return self.move.size == self.owner.size
+    def n_owners(self):
+        return self.reward.size // self.fan
 
 
 @dataclass(frozen=True, eq=False)
 class PointModel:
-    """The grid's cells as points: ``moves`` of every cell (ordered by cell), ``points`` (X, M, d) the
-    points a cell stands for and ``terminal`` (X, M) w at them (not tempered), and ``starts`` where each
-    cell's entries begin (for the sums over a cell)."""
+    """The grid's cells as points: ``moves`` of every cell (cell by cell), ``points`` (X, M, d) the points a
+    cell stands for, ``terminal`` (X, M) w at them (not tempered)."""
 
     problem: object
     moves: Moves
     points: np.ndarray
     terminal: np.ndarray
-    starts: np.ndarray
 
     @property
     def horizon(self):
         return int(self.problem.horizon)
 
 
-def _entries(problem, owner, point, successor):
-    """Moves from (point -> successor) with their successors on the grid (module docstring)."""
-    g = problem.grid
-    reward = problem.reward.rate(g, point, _controls_of(problem, owner.size)) * problem.dt
+def _moves(problem, point, successor, fan):
+    """Moves point -> successor (controls varying fastest) with their successors on the grid."""
+    g, m = problem.grid, problem.controls.shape[1]
+    controls = np.broadcast_to(problem.controls[None], (point.shape[0] // problem.n_actions, problem.n_actions, m))
+    reward = problem.reward.rate(g, point, controls.reshape(-1, m)) * problem.dt
     if problem.scheme == "barycentric":
         vertices, weights = kuhn_weights(g, successor)
-        keep = weights > 0
-        move = np.broadcast_to(np.arange(owner.size)[:, None], weights.shape)[keep]
-        return Moves(owner, point, successor, reward, move, vertices[keep], np.log(weights[keep]))
-    return Moves(owner, point, successor, reward, np.arange(owner.size), g.cell_of(successor), np.zeros(owner.size))
-
-
-def _controls_of(problem, n_moves):
-    """The control of each of ``n_moves`` moves laid out as (owner, control, sample) with controls varying."""
-    A = problem.n_actions
-    reps = n_moves // A
-    return np.broadcast_to(problem.controls[None], (reps, A, problem.controls.shape[1])).reshape(-1, problem.controls.shape[1])
+        with np.errstate(divide="ignore"):
+            return Moves(point, successor, reward, vertices, np.log(weights), fan)
+    return Moves(point, successor, reward, g.cell_of(successor)[:, None], np.zeros((point.shape[0], 1)), fan)
 
 
 def point_model(problem, progress=None):
@@ -122,34 +110,23 @@ def point_model(problem, progress=None):
     parts, block = [], max(1, 2 ** 18 // (A * M))
     for start in range(0, g.n_cells, block):
         cells = np.arange(start, min(start + block, g.n_cells))
-        # moves ordered (cell, sample, control): the control varies fastest
-        x = np.repeat(points[cells].reshape(-1, g.ndim), A, axis=0)
-        owner = np.repeat(cells, M * A)
+        x = np.repeat(points[cells].reshape(-1, g.ndim), A, axis=0)      # (cell, sample, control)
         successor = problem.step(x, np.tile(problem.controls, (cells.size * M, 1)))
-        parts.append(_entries(problem, owner, x, successor))
+        parts.append(_moves(problem, x, successor, A * M))
         if progress is not None:
             progress(int(cells[-1]) + 1, g.n_cells)
-    moves = _concat(parts)
-    row = moves.owner[moves.move]
-    starts = np.searchsorted(row, np.arange(g.n_cells))
+    moves = Moves(*(np.concatenate([getattr(p, f) for p in parts])
+                    for f in ("point", "successor", "reward", "target", "log_weight")), A * M)
     terminal = problem.reward.terminal(g, points.reshape(-1, g.ndim)).reshape(g.n_cells, M)
-    return PointModel(problem, moves, points, terminal, starts)
-
-
-def _concat(parts):
-    offsets = np.cumsum([0] + [p.n_moves for p in parts[:-1]])
-    return Moves(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("owner", "point", "successor", "reward")),
-                 np.concatenate([p.move + o for p, o in zip(parts, offsets)]),
-                 np.concatenate([p.target for p in parts]), np.concatenate([p.log_weight for p in parts]))
+    return PointModel(problem, moves, points, terminal)
 
 
 def point_moves(problem, points):
-    """:class:`Moves` from continuous ``points`` (N, d) under every control (owner: the point's number)."""
+    """:class:`Moves` from continuous ``points`` (N, d) under every control."""
     g, A = problem.grid, problem.n_actions
     points = g.wrap(np.atleast_2d(np.asarray(points, dtype=float)))
     x = np.repeat(points, A, axis=0)
-    successor = problem.step(x, np.tile(problem.controls, (len(points), 1)))
-    return _entries(problem, np.repeat(np.arange(len(points)), A), x, successor)
+    return _moves(problem, x, problem.step(x, np.tile(problem.controls, (len(points), 1))), A)
 
 
 def allowed_moves(regions, moves):
@@ -170,18 +147,21 @@ def blocked(region, p, q):
     return hit
 
 
-def _segment_logsumexp(v, starts):
-    """log sum exp of v (E, ...) over the segments beginning at ``starts`` (-inf for empty sums)."""
-    m = np.maximum.reduceat(v, starts, axis=0)
-    shift = np.where(np.isfinite(m), m, 0.0)
-    counts = np.diff(np.r_[starts, v.shape[0]])
-    with np.errstate(divide="ignore"):
-        return np.log(np.add.reduceat(np.exp(v - np.repeat(shift, counts, axis=0)), starts, axis=0)) + shift
-
-
 def _log(x):
     with np.errstate(divide="ignore"):
         return np.log(x)
+
+
+def _logsumexp(v, axis):
+    """log sum exp along ``axis`` (-inf for an empty sum)."""
+    m = np.max(v, axis=axis, keepdims=True)
+    shift = np.where(np.isfinite(m), m, 0.0)
+    return _log(np.exp(v - shift).sum(axis=axis)) + np.squeeze(shift, axis=axis)
+
+
+def _by_owner(moves, values):
+    """``values`` (P, ...) reshaped to (owners, fan, ...)."""
+    return values.reshape((moves.n_owners, moves.fan) + values.shape[1:])
 
 
 def points_allowed(model, regions):
@@ -193,23 +173,14 @@ def points_allowed(model, regions):
     return ok.reshape(model.points.shape[:2])
 
 
-def _entry_starts(moves):
-    return np.searchsorted(moves.move, np.arange(moves.n_moves))
-
-
-def _owner_starts(moves):
-    return np.searchsorted(moves.owner, np.arange(moves.owner.max() + 1))
-
-
 def successor_log_values(moves, logZ_next, cell_ok):
     """log Z_{t+1} at every move's successor (P,): its cell's value (sample scheme), or the interpolation
     over the allowed vertices with their weights renormalized (barycentric); ``cell_ok`` (X,): cells with
     an allowed point."""
-    if moves.one_entry:
-        return logZ_next[moves.target]
-    starts = _entry_starts(moves)
-    value = _segment_logsumexp(moves.log_weight + logZ_next[moves.target], starts)
-    mass = np.add.reduceat(np.exp(moves.log_weight) * cell_ok[moves.target], starts)
+    if moves.target.shape[1] == 1:
+        return logZ_next[moves.target[:, 0]]
+    value = _logsumexp(moves.log_weight + logZ_next[moves.target], axis=1)
+    mass = (np.exp(moves.log_weight) * cell_ok[moves.target]).sum(axis=1)
     return np.where(mass > 0, value - _log(np.maximum(mass, 1e-300)), -np.inf)
 
 
@@ -221,63 +192,25 @@ def log_partition(model, regions=(), temperature=1.0):
     move_reward = np.where(allowed_moves(regions, mv), mv.reward / temperature, -np.inf)
     logZ = np.empty((model.horizon + 1, ok.shape[0]))
     logZ[-1] = _terminal(model, ok, temperature)
-    owners = _owner_starts(mv)
     for t in range(model.horizon - 1, -1, -1):
-        q = move_reward + successor_log_values(mv, logZ[t + 1], cell_ok)
-        logZ[t] = np.where(cell_ok, _segment_logsumexp(q, owners) - _log(np.maximum(n_ok, 1)), -np.inf)
+        q = _by_owner(mv, move_reward + successor_log_values(mv, logZ[t + 1], cell_ok))
+        logZ[t] = np.where(cell_ok, _logsumexp(q, axis=1) - _log(np.maximum(n_ok, 1)), -np.inf)
     return logZ
 
 
 def _terminal(model, ok, temperature):
     """log Z_T per cell: log of the mean of exp(w/tau) over the cell's allowed points."""
     w = np.where(ok, model.terminal / temperature, -np.inf)
-    m = w.max(axis=1)
-    shift = np.where(np.isfinite(m), m, 0.0)
-    return np.where(ok.any(axis=1), _log(np.exp(w - shift[:, None]).sum(axis=1)) + shift
-                    - _log(np.maximum(ok.sum(axis=1), 1)), -np.inf)
+    return np.where(ok.any(axis=1), _logsumexp(w, axis=1) - _log(np.maximum(ok.sum(axis=1), 1)), -np.inf)
 
 
 def _lambda_ratio(moves, cell_ok, cell_ok_plus):
-    """Lambda_C(m) / Lambda_+(m, k) (P, K): 1 for the sample scheme (one entry per move)."""
-    starts = _entry_starts(moves)
+    """Lambda_C(m) / Lambda_+(m, k) (P, K): the share of a successor's interpolation weight on vertices
+    allowed under C over that under C+ (1 with one entry per move)."""
     w = np.exp(moves.log_weight)
-    base = np.add.reduceat(w * cell_ok[moves.target], starts)
-    plus = np.add.reduceat(w[:, None] * cell_ok_plus[moves.target], starts, axis=0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = base[:, None] / plus
-    r[~np.isfinite(r)] = 0.0
-    return r
-
-
-def satisfaction(model, logZ, regions, candidates, temperature, times):
-    """F_{C+,t} = Z_{C+,t} / Z_{C,t} (X, K) on the cells at each of ``times`` (a dict t -> array), for the
-    ``candidates`` (K regions, each added to ``regions`` = C whose log Z is ``logZ``), by the ratio backup
-    F_t(x) = (n_C / n_+) sum over x's allowed moves of pi_C(move) Phi_{C+} (Lambda_C / Lambda_+)
-    sum_entries share F_{t+1}(vertex) (module docstring; n: allowed points of x; 0 where Z_C = 0)."""
-    mv = model.moves
-    ok = points_allowed(model, regions)
-    ok_plus = np.stack([ok & ~c.inside(model.points.reshape(-1, model.points.shape[2])).reshape(ok.shape)
-                        for c in candidates], axis=2)                                            # (X, M, K)
-    n_ratio = _ratio(ok.sum(axis=1)[:, None], ok_plus.sum(axis=1))                              # (X, K)
-    cell_ok, cell_ok_plus = ok.any(axis=1), ok_plus.any(axis=1)
-    extra = np.stack([~blocked(c, mv.point, mv.successor) for c in candidates], axis=1).astype(float)   # (P, K)
-    if not mv.one_entry:
-        extra = extra * _lambda_ratio(mv, cell_ok, cell_ok_plus)
-    w = np.where(ok, model.terminal / temperature, -np.inf)
-    with np.errstate(invalid="ignore"):
-        share = np.exp(w - logZ[-1][:, None] - _log(ok.sum(axis=1))[:, None])
-    share[~np.isfinite(share)] = 0.0
-    F = np.einsum("xm,xmk->xk", share, ok_plus) * n_ratio
-    out = {model.horizon: F} if model.horizon in times else {}
-    move_reward = np.where(allowed_moves(regions, mv), mv.reward / temperature, -np.inf)
-    owners, starts = _owner_starts(mv), _entry_starts(mv)
-    for t in range(model.horizon - 1, -1, -1):
-        at = successor_log_values(mv, logZ[t + 1], cell_ok)
-        p_move = _probabilities(move_reward + at, owners, mv.owner, logZ[t] + _log(ok.sum(axis=1)))
-        F = _weighted_sums(mv, p_move, extra, _shares(mv, logZ[t + 1], at, starts), F, starts, owners) * n_ratio
-        if t in times:
-            out[t] = F
-    return out
+    base = (w * cell_ok[moves.target]).sum(axis=1)
+    plus = (w[:, :, None] * cell_ok_plus[moves.target]).sum(axis=1)
+    return _ratio(base[:, None], plus)
 
 
 def _ratio(a, b):
@@ -287,58 +220,80 @@ def _ratio(a, b):
     return r
 
 
-def _probabilities(q, owners, owner, total):
-    """exp(q - total[owner]) with 0 where undefined: each move's probability within its cell or point."""
+def _candidate_terms(model, moves, regions, candidates):
+    """(cell_ok under C (X,), Phi_{C+} times Lambda_C / Lambda_+ per move and candidate (P, K))."""
+    ok = points_allowed(model, regions)
+    cell_ok = ok.any(axis=1)
+    pts = model.points.reshape(-1, model.points.shape[2])
+    extra = np.stack([~blocked(c, moves.point, moves.successor) for c in candidates], axis=1).astype(float)
+    if moves.target.shape[1] > 1:
+        cell_ok_plus = np.stack([(ok & ~c.inside(pts).reshape(ok.shape)).any(axis=1) for c in candidates], axis=1)
+        extra *= _lambda_ratio(moves, cell_ok, cell_ok_plus)
+    return cell_ok, extra
+
+
+def satisfaction(model, logZ, regions, candidates, temperature, times):
+    """F_{C+,t} = Z_{C+,t} / Z_{C,t} (X, K) on the cells at each of ``times`` (a dict t -> array), for the
+    ``candidates`` (K regions, each added to ``regions`` = C whose log Z is ``logZ``), by the ratio backup
+    F_t(x) = (n_C / n_+) sum over x's allowed moves of pi_C(move) Phi_{C+} (Lambda_C / Lambda_+)
+    sum_vertices share F_{t+1}(vertex) (module docstring; n: allowed points of x; 0 where Z_C = 0)."""
+    mv = model.moves
+    ok = points_allowed(model, regions)
+    pts = model.points.reshape(-1, model.points.shape[2])
+    ok_plus = np.stack([ok & ~c.inside(pts).reshape(ok.shape) for c in candidates], axis=2)    # (X, M, K)
+    n_ratio = _ratio(ok.sum(axis=1)[:, None].astype(float), ok_plus.sum(axis=1).astype(float))   # (X, K)
+    cell_ok, extra = _candidate_terms(model, mv, regions, candidates)
+    w = np.where(ok, model.terminal / temperature, -np.inf)
     with np.errstate(invalid="ignore"):
-        p = np.exp(q - total[owner])
+        share = np.exp(w - logZ[-1][:, None] - _log(ok.sum(axis=1))[:, None])
+    share[~np.isfinite(share)] = 0.0
+    F = np.einsum("xm,xmk->xk", share, ok_plus) * n_ratio
+    out = {model.horizon: F} if model.horizon in times else {}
+    move_reward = np.where(allowed_moves(regions, mv), mv.reward / temperature, -np.inf)
+    for t in range(model.horizon - 1, -1, -1):
+        at = successor_log_values(mv, logZ[t + 1], cell_ok)
+        q = move_reward + at
+        p = _probabilities(_by_owner(mv, q), logZ[t] + _log(ok.sum(axis=1)))
+        F = _weighted_sums(mv, p, extra, logZ[t + 1], at, F) * n_ratio
+        if t in times:
+            out[t] = F
+    return out
+
+
+def _probabilities(q, total):
+    """exp(q - total) (owners, fan) with 0 where undefined: each move's probability within its owner."""
+    with np.errstate(invalid="ignore"):
+        p = np.exp(q - total[:, None])
     p[~np.isfinite(p)] = 0.0
     return p
 
 
-def _shares(moves, logZ_next, at, starts):
-    """Each entry's share of its move's successor value: lambda Z(vertex) / sum lambda Z (E,)."""
-    if moves.one_entry:
-        return None
-    with np.errstate(invalid="ignore"):
-        share = np.exp(moves.log_weight + logZ_next[moves.target] - at[moves.move])
-    share[~np.isfinite(share)] = 0.0
-    return share
-
-
-def _weighted_sums(mv, p_move, extra, share, F_next, starts, owners):
-    """sum over each owner's moves of p * extra * (sum over the move's entries of share * F_next[target]),
-    as one sparse (owners x moves) product per step; ``extra`` (P, K) floats."""
-    if share is None:
-        at_successor = np.take(F_next, mv.target, axis=0)
+def _weighted_sums(mv, p, extra, logZ_next, at, F_next):
+    """sum over each owner's moves of p * extra * F at the successor, F at a successor Z_C-weighted over its
+    vertices: lambda Z(vertex) / sum lambda Z."""
+    if mv.target.shape[1] == 1:
+        at_successor = np.take(F_next, mv.target[:, 0], axis=0)
     else:
-        per_entry = np.take(F_next, mv.target, axis=0)
-        per_entry *= share[:, None]
-        at_successor = np.add.reduceat(per_entry, starts, axis=0)
+        with np.errstate(invalid="ignore"):
+            share = np.exp(mv.log_weight + logZ_next[mv.target] - at[:, None])
+        share[~np.isfinite(share)] = 0.0
+        at_successor = np.einsum("pk,pkc->pc", share, np.take(F_next, mv.target, axis=0))
     at_successor *= extra
-    indptr = np.r_[owners, mv.n_moves]
-    A = sp.csr_matrix((p_move, np.arange(mv.n_moves), indptr), shape=(owners.size, mv.n_moves))
-    return A @ at_successor
+    return np.einsum("of,ofc->oc", p, _by_owner(mv, at_successor))
 
 
 def point_log_values(moves, logZ_next, allowed, cell_ok, temperature):
     """log Z_t at continuous points, one exact step ahead of the grid's log Z_{t+1} (``logZ_next`` (X,)):
     log sum_a Phi exp(r dt/tau) Z_{t+1}(f(s, a)) (N,) for the points of ``moves`` (:func:`point_moves`)."""
     q = np.where(allowed, moves.reward / temperature, -np.inf) + successor_log_values(moves, logZ_next, cell_ok)
-    return _segment_logsumexp(q, _owner_starts(moves))
+    return _logsumexp(_by_owner(moves, q), axis=1)
 
 
 def point_ratios(model, moves, logZ_next, F_next, regions, candidates, temperature):
     """F_t = Z_{C+,t} / Z_{C,t} at continuous points (N, K), one exact step ahead of the grid's log Z_{C,t+1}
     and F_{t+1} (X, K): E_{a ~ pi_C}[Phi_{C+} F(f(s, a))] (module docstring)."""
-    ok = points_allowed(model, regions)
-    cell_ok = ok.any(axis=1)
-    pts = model.points.reshape(-1, model.points.shape[2])
-    cell_ok_plus = np.stack([(ok & ~c.inside(pts).reshape(ok.shape)).any(axis=1) for c in candidates], axis=1)
-    extra = np.stack([~blocked(c, moves.point, moves.successor) for c in candidates], axis=1).astype(float)
-    if not moves.one_entry:
-        extra = extra * _lambda_ratio(moves, cell_ok, cell_ok_plus)
-    starts, owners = _entry_starts(moves), _owner_starts(moves)
+    cell_ok, extra = _candidate_terms(model, moves, regions, candidates)
     at = successor_log_values(moves, logZ_next, cell_ok)
-    q = np.where(allowed_moves(regions, moves), moves.reward / temperature, -np.inf) + at
-    p = _probabilities(q, owners, moves.owner, _segment_logsumexp(q, owners))
-    return _weighted_sums(moves, p, extra, _shares(moves, logZ_next, at, starts), F_next, starts, owners)
+    q = _by_owner(moves, np.where(allowed_moves(regions, moves), moves.reward / temperature, -np.inf) + at)
+    p = _probabilities(q, _logsumexp(q, axis=1))
+    return _weighted_sums(moves, p, extra, logZ_next, at, F_next)
