@@ -182,13 +182,14 @@ def _check(families, rounds, min_gain, temperature):
 
 
 def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, temperature="fit", plane=(0, 1),
-          largest=None, smallest=None, truncate=False, progress=None, model="points", **cell_options):
+          largest=None, smallest=None, truncate=False, progress=None, model="points", points=None, **cell_options):
     """Greedy maximum-likelihood constraint inference from a :class:`~.recordings.Recording` (module
     docstring). ``families``: "bound", "disk", "box" (obstacles in the coordinates ``plane``, sizes up to
     ``largest``, at least ``smallest``: default a quarter of the plane's smaller extent and its smallest
     cell); ``rounds``: at most this many constraints; ``min_gain``: nats per demonstration; ``temperature``:
     "fit" or a number (the file's is ``problem.reward.temperature``); ``truncate``: cut demonstrations
-    to the shortest; ``progress(fraction, detail)``: called as the work advances (1.0 at the end).
+    to the shortest; ``progress(fraction, detail)``: called as the work advances (1.0 at the end);
+    ``points``: the :func:`.pointwise.point_model` of ``problem`` if already built (reused across recordings).
     ``model="cells"``: chapters 2-3's grid MDP instead (:func:`.cells.infer_cells` with ``cell_options``)."""
     if model == "cells":
         from .cells import infer_cells
@@ -201,7 +202,10 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
     say = progress or (lambda *args: None)
     seconds, start = {}, time.perf_counter()
     data = ev.demonstrated(problem, recording, truncate)
-    pm = point_model(problem, lambda done, total: say(0.3 * done / total, f"integrating cells {done}/{total}"))
+    pm = points if points is not None else \
+        point_model(problem, lambda done, total: say(0.3 * done / total, f"integrating cells {done}/{total}"))
+    if pm.problem is not problem:
+        raise ValueError("points: built for another problem; pass point_model(problem)")
     seconds["model"] = time.perf_counter() - start
     start = time.perf_counter()
     regions, accepted, tables, temps, notes, stop = [], [], [], [], [], "rounds"
