@@ -32,7 +32,8 @@ where the demonstrations pass it on more than one side -- and accepts the best i
 log-likelihood by --min-gain nats per demonstration (default log 2 = {MIN_GAIN["points"]}: more than half
 of the model's trajectories would cross it) and by log(K / 0.05) in all. Each accepted constraint comes with the interval of
 values whose likelihood is within a factor 20 of the best. The temperature is fitted by maximum
-likelihood (--temperature NUMBER fixes it).
+likelihood, as are the weights of its features (the goal stays the file's); --temperature file or NUMBER
+keeps the file's reward at that temperature.
 
 --model cells: the dynamics are discretized into a tabular MDP (Monte Carlo within cells, Stocking et
 al. 2021, or barycentric interpolation), the recordings mapped onto it, and chapters 2-3's candidates
@@ -96,9 +97,9 @@ def register(commands):
     infer.add_argument("--min-gain", type=float, metavar="NATS",
                        help=f"accept a constraint only if it gains NATS per demonstration (points: exact gain, "
                             f"default {MIN_GAIN['points']}; cells: -log F, default {MIN_GAIN['cells']})")
-    infer.add_argument("--temperature", metavar="fit|NUMBER", default="fit",
-                       help="points: the demonstrator's temperature, fitted by maximum likelihood (default) "
-                            "or fixed (the file's: --temperature file)")
+    infer.add_argument("--temperature", metavar="fit|file|NUMBER", default="fit",
+                       help="points: fit the reward's weights by maximum likelihood (default), or keep the file's "
+                            "reward at its temperature (file) or at NUMBER")
     infer.add_argument("--top", type=int, default=DEFAULT_TOP, help=f"candidates printed per round (default {DEFAULT_TOP})")
     infer.add_argument("--cells", metavar="N[,N...]", help="cells per coordinate (overrides [state] cells)")
     infer.add_argument("--scheme", choices=("sample", "barycentric"), help="discretization (overrides the file)")

@@ -24,7 +24,7 @@ def report_inference(args, run, traj_path, system_path):
                "seconds": run.seconds, "outputs": {k: str(v) for k, v in outputs.items()}}
     if args.model == "points":
         data = run.data
-        results.update(n_demonstrations=data.n, steps=data.steps, temperatures=run.temperatures, notes=run.notes,
+        results.update(n_demonstrations=data.n, steps=data.steps, weights=_weights(run), notes=run.notes,
                        best_rejected=run.best_rejected(), controls_inferred=data.inferred)
         summary = _summary_points(results)
     else:
@@ -35,6 +35,19 @@ def report_inference(args, run, traj_path, system_path):
                        n_candidates=len(run.candidates), thresholds_raised_by_lemma=run.candidates.raised)
         summary = _summary_cells(results, mapped.notes())
     common.report(args, summary, results)
+
+
+def _weights(run):
+    """The reward's weights of every round as {"q": [...], "c": [...], "Q": [...]} (a fixed temperature:
+    the file's weights divided by it)."""
+    from ..constraints.continuous.pointwise import file_weights
+    p = run.problem
+    d, m = p.grid.ndim, p.controls.shape[1]
+    out = []
+    for w in run.weights:
+        w = file_weights(p, w) if hasattr(w, "__float__") and not hasattr(w, "__len__") else w
+        out.append({"q": [float(v) for v in w[:d]], "c": [float(v) for v in w[d:d + m]], "Q": [float(v) for v in w[d + m:]]})
+    return out
 
 
 def _round_tables(run, table):
@@ -48,8 +61,10 @@ def _header(r):
 
 
 def _summary_points(r):
-    lines = [_header(r), f"Temperature (fitted by maximum likelihood unless fixed), per round: "
-                         f"{', '.join(f'{t:.3g}' for t in r['temperatures'])}", ""]
+    lines = [_header(r), "Reward weights per round (maximum likelihood unless fixed; running q per coordinate, "
+                         "c per control, terminal Q per coordinate, in the file's units divided by the temperature):"]
+    lines += [f"  round {i}: " + ", ".join(f"{k} = [{', '.join(f'{v:.3g}' for v in vals)}]" for k, vals in w.items())
+              for i, w in enumerate(r["weights"], start=1)] + [""]
     for i, ranking in enumerate(r["ranking"], start=1):
         lines.append(f"round {i}")
         lines.append(f"  {'rank':>4}  {'constraint':<52}{'gain':>10}{'per demo':>10}{'F':>8}")
@@ -62,14 +77,14 @@ def _summary_points(r):
            "min_gain": "the best candidate gains too little"}[r["stopped"]]
     lines.append(f"Stopped: {why}. Accepted constraints ({len(r['chosen'])}):")
     for row in r["chosen"]:
-        lines.append(f"  round {row['round']}: {row['constraint']}, exact gain {row['gain_refit']:.2f} nats "
-                     f"({row['gain_refit'] / r['n_demonstrations']:.3f} per demonstration; needed "
+        lines.append(f"  round {row['round']}: {row['constraint']}, exact gain {row['gain']:.2f} nats "
+                     f"({row['gain'] / r['n_demonstrations']:.3f} per demonstration; needed "
                      f"{row['needed']:.2f}); {row['interval_of']} in [{row['interval_low']:.4g}, "
                      f"{row['interval_high']:.4g}] (likelihood within a factor 20 of the best)")
     rejected = r["best_rejected"]
     if rejected:
-        lines.append(f"  refused: {rejected['constraint']}, exact gain {rejected['gain_refit']:.2f} nats "
-                     f"({rejected['gain_refit'] / r['n_demonstrations']:.3f} per demonstration; needed "
+        lines.append(f"  refused: {rejected['constraint']}, exact gain {rejected['gain']:.2f} nats "
+                     f"({rejected['gain'] / r['n_demonstrations']:.3f} per demonstration; needed "
                      f"{rejected['needed']:.2f})")
     lines += [f"Note: {note}" for note in r["notes"]]
     lines += ["", "gain: the exact increase of the demonstrations' log-likelihood (nats, all demonstrations); "

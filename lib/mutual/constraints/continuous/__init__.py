@@ -31,14 +31,15 @@ from .grid import Grid
 from .cells import CellInference, infer_cells
 from .inference import ContinuousInference, boundary_errors, infer
 from .mapping import to_demonstrations
+from .pointwise import PointModel, point_model
 from .problem import Problem, QuadraticReward
 from .recordings import Recording, read_recording, write_recording
 from .regions import Bound, Box, Disk, boundary_distance, parse_region
 from .systemfile import load_system, system_from_mapping
 from .systems import SYSTEMS, System, integrate, named_system
 
-__all__ = ["SYSTEMS", "Bound", "Box", "CellInference", "ContinuousInference", "Disk", "Grid", "Problem", "QuadraticReward", "Recording",
+__all__ = ["SYSTEMS", "Bound", "Box", "CellInference", "ContinuousInference", "Disk", "Grid", "PointModel", "Problem", "QuadraticReward", "Recording",
            "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors", "box_regions",
            "discretize", "disk_regions", "infer", "infer_cells", "integrate", "load_system", "mppi_rollouts", "named_system",
-           "parse_region", "read_recording", "region_candidates", "rollout", "soft_demonstrator", "starts_around",
+           "parse_region", "point_model", "read_recording", "region_candidates", "rollout", "soft_demonstrator", "starts_around",
            "system_from_mapping", "to_demonstrations", "write_recording"]

@@ -6,12 +6,17 @@
 2. the grid's cells become points of the deterministic system (:mod:`.pointwise`): the likelihood of
    the continuous demonstrations is exact up to Z on the grid, and chance thresholds are psi = 0 per
    point (eq. 3.3 on deterministic transitions) -- nothing is raised, nothing is dropped;
-3. the temperature is the file's, or (``temperature="fit"``, the default) the maximum-likelihood one
-   under the constraints found so far, refitted after each accepted constraint;
+3. the reward: the file's at a given temperature, or (``temperature="fit"``, the default) the
+   maximum-likelihood weights of its features (the squared errors per coordinate and controls, running and
+   terminal: maximum-entropy inverse optimal control, eq. 2.8, concave in the weights; the goal stays the
+   file's) under the constraints found so far -- first the temperature, then every weight, within a factor
+   ``TEMPERATURE_RANGE`` of the file's at that temperature -- refitted after each accepted constraint. A hand-written controller is far less variable than a Boltzmann model
+   at one temperature of the file's reward; fitting the weights lets the model be as precise as the
+   demonstrator where it is (at its goal, along its path), which is where a less precise model would read
+   avoidance into regions no demonstration entered;
 4. each round proposes the most likely member of every family (:mod:`.search`: the tightest consistent
    bound per coordinate and side, the largest consistent disk or box at the best centre) and scores
-   each by its exact log-likelihood gain; the best is scored again with the temperature refitted under it
-   (the likelihood ratio with the temperature profiled out);
+   each by its exact log-likelihood gain at the round's reward (refitted after each accepted constraint);
 5. **stop rule**: the best candidate is accepted only if its gain is at least ``min_gain`` nats per
    demonstration *and* log(K / ALPHA) nats in all (K: the candidates scored in the round). The first is
    task relevance (Fig. 3.3: only constraints relevant to the task can be identified): with the gain
@@ -40,10 +45,11 @@ import pandas as pd
 
 from . import evidence as ev
 from . import search
-from .pointwise import point_model
+from .pointwise import file_weights, point_model
 from .regions import Bound, boundary_distance
 
 MIN_GAIN = math.log(2)   # nats per demonstration: the median unconstrained trajectory crosses it (docstring)
+FIT, REFIT = 40, 15      # L-BFGS-B iterations of the reward's weights: first, and after each accepted constraint
 ALPHA = 0.05        # chance of a false constraint per round; 1 - ALPHA: the interval's coverage
 FAMILIES = ("bound", "disk", "box")
 _PROFILE = np.array([0.0, 0.001, 0.003, 0.01, 0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0])
@@ -52,16 +58,18 @@ _PROFILE = np.array([0.0, 0.001, 0.003, 0.01, 0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 
 @dataclass(eq=False)
 class ContinuousInference:
     """The outcome of :func:`infer`: the ``problem``, the ``data`` (:class:`.evidence.Demonstrated`),
-    ``accepted`` (per accepted constraint: region, gain, interval, temperature), ``rounds`` (one table per
-    round of every candidate scored), why it ``stop``-ped, the ``temperatures`` used per round, ``notes``
-    (what the user may need to change, in words) and ``seconds`` per stage."""
+    ``accepted`` (per accepted constraint: region, gain, interval, its likelihood ``profile`` (values, total
+    gains at the round's weights), weights), ``rounds`` (one table per round of every candidate scored),
+    why it ``stop``-ped, the reward ``weights`` used per round (a temperature, or per-feature weights
+    :func:`.pointwise.file_weights`), ``notes`` (what the user may need to change, in words) and ``seconds``
+    per stage."""
 
     problem: object
     data: object
     accepted: list
     rounds: list
     stop: str
-    temperatures: list
+    weights: list
     notes: list = field(default_factory=list)
     seconds: dict = field(default_factory=dict)
 
@@ -103,22 +111,20 @@ class ContinuousInference:
         if self.stop != "min_gain" or not self.rounds:
             return None
         table = self.rounds[-1]
-        refused = table[np.isfinite(table["gain_refit"])]
-        return refused.iloc[0].to_dict() if len(refused) else None
+        return table.iloc[0].to_dict() if len(table) else None
 
 
-def _round_table(number, scored, grid, n_demos, needed, accepted, refitted, chosen=None):
-    """One row per candidate of a round (most likely first); the best also carries its gain with the
-    temperature refitted under it (``gain_refit``: what the stop rule compares with ``needed``)."""
+def _round_table(number, scored, grid, n_demos, needed, accepted, chosen=None):
+    """One row per candidate of a round (most likely first): its exact gain at the round's reward in all
+    and per demonstration, F, and the gain the stop rule ``needed``."""
     rows = []
     order = sorted(range(len(scored)), key=lambda k: -np.nan_to_num(scored[k][1], nan=-np.inf, neginf=-np.inf))
     for rank, k in enumerate(order, start=1):
         region, gain = scored[k]
-        top = region is chosen
         rows.append({"round": number, "rank": rank, "kind": region.kind, "constraint": region.describe(grid),
                      **region.fields(grid), "gain": gain, "gain_per_demo": gain / n_demos,
-                     "F": math.exp(-gain / n_demos) if np.isfinite(gain) else math.nan,
-                     "gain_refit": refitted if top else math.nan, "needed": needed, "accepted": bool(accepted and top)})
+                     "F": math.exp(-gain / n_demos) if np.isfinite(gain) else math.nan, "needed": needed,
+                     "accepted": bool(accepted and region is chosen)})
     return pd.DataFrame(rows)
 
 
@@ -143,8 +149,9 @@ def _candidates(model, data, logZ, regions, families, plane, tau, sizes):
 
 
 def likelihood_interval(model, data, logZ, regions, region, gain, tau, alpha=ALPHA):
-    """(low, high) of ``region``'s parameter (:func:`.search.size_of`) whose likelihood is within a factor
-    1/alpha of the best (module docstring), from the profile of the region loosened step by step."""
+    """``((low, high), reaches the box, (values, gains))``: the values of ``region``'s parameter
+    (:func:`.search.size_of`) whose likelihood is within a factor 1/alpha of the best (module docstring),
+    from the profile of the region loosened step by step (its values and total gains, best first)."""
     grid = model.problem.grid
     if isinstance(region, Bound):
         room = (grid.high[region.dim] - region.value) if region.side == "upper" else (region.value - grid.low[region.dim])
@@ -155,16 +162,24 @@ def likelihood_interval(model, data, logZ, regions, region, gain, tau, alpha=ALP
     values = np.r_[search.size_of(region), [search.size_of(r) for r in loosened]]
     keep = np.isfinite(gains)
     near, far = search.profile_interval(values[keep], gains[keep], math.log(1 / alpha))
-    return (min(near, far), max(near, far)), bool(abs(far - values[keep][-1]) < 1e-12)
+    return (min(near, far), max(near, far)), bool(abs(far - values[keep][-1]) < 1e-12), (values[keep], gains[keep])
 
 
-def _temperature(model, data, regions, temperature, around, width=ev.TEMPERATURE_RANGE):
-    """(tau, ll, logZ, at the edge of the search) under ``regions``: fitted around ``around``, or fixed."""
-    if temperature == "fit":
-        tau, ll, logZ, edge = ev.fit_temperature(model, data, regions, around, width)
-        return tau, ll, logZ, edge
-    ll, logZ = ev.log_likelihood(model, data, regions, float(temperature))
-    return float(temperature), ll, logZ, False
+def _fit(model, data, regions, temperature, start=None, reference=None):
+    """(weights, ll, logZ, the temperature at the edge of its search, reference) under ``regions``: with
+    ``temperature="fit"`` the maximum-likelihood feature weights from ``start`` (none: first the temperature,
+    then every weight from the file's divided by it, which is the ``reference`` of the weights' caps); else
+    the file's reward at that temperature."""
+    if temperature != "fit":
+        ll, logZ = ev.log_likelihood(model, data, regions, float(temperature))
+        return float(temperature), ll, logZ, False, None
+    edge, iterations = False, REFIT
+    if start is None:
+        tau, _, _, edge = ev.fit_temperature(model, data, regions, model.problem.reward.temperature)
+        start = reference = file_weights(model.problem, tau)
+        iterations = FIT
+    weights, ll, logZ = ev.fit_weights(model, data, regions, start, reference, iterations)
+    return weights, ll, logZ, edge, reference
 
 
 def _check(families, rounds, min_gain, temperature):
@@ -209,9 +224,9 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
     seconds["model"] = time.perf_counter() - start
     start = time.perf_counter()
     regions, accepted, tables, temps, notes, stop = [], [], [], [], [], "rounds"
-    tau, ll, logZ, edge = _temperature(pm, data, regions, temperature, problem.reward.temperature)
-    seconds["temperature"] = time.perf_counter() - start
-    say(0.4, f"temperature {tau:.3g}")
+    tau, ll, logZ, edge, reference = _fit(pm, data, regions, temperature)
+    seconds["fit"] = time.perf_counter() - start
+    say(0.4, "reward fitted" if temperature == "fit" else f"temperature {tau:g}")
     sizes = {"largest": largest, "smallest": smallest}
     start = time.perf_counter()
     for number in range(1, rounds + 1):
@@ -219,26 +234,23 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
         scored, tried = _candidates(pm, data, logZ, regions, families, plane, tau, sizes)
         finite = [s for s in scored if np.isfinite(s[1])]
         if not finite:
-            tables.append(_round_table(number, scored, problem.grid, data.n, math.nan, False, math.nan))
+            tables.append(_round_table(number, scored, problem.grid, data.n, math.nan, False))
             stop = "no candidate"
             break
         best = max(finite, key=lambda s: s[1])
-        refit = _temperature(pm, data, regions + [best[0]], temperature, tau, width=3.0)
-        gain = refit[1] - ll                                   # the exact gain, the temperature refitted
         needed = max(min_gain * data.n, math.log(max(tried, 1) / ALPHA))
-        ok = gain >= needed
-        tables.append(_round_table(number, scored, problem.grid, data.n, needed, ok, gain, best[0]))
+        ok = best[1] >= needed
+        tables.append(_round_table(number, scored, problem.grid, data.n, needed, ok, best[0]))
         say(0.4 + 0.6 * number / rounds, f"round {number}: {best[0].describe(problem.grid)}")
         if not ok:
             stop = "min_gain"
             break
-        interval, open_ = likelihood_interval(pm, data, logZ, regions, best[0], best[1], tau)
-        accepted.append({"region": best[0], "constraint": best[0].describe(problem.grid), "gain": gain,
-                         "interval": interval, "interval_of": _parameter(best[0], problem.grid), "temperature": tau,
-                         "interval_reaches_box": open_})
+        interval, open_, profile = likelihood_interval(pm, data, logZ, regions, best[0], best[1], tau)
+        accepted.append({"region": best[0], "constraint": best[0].describe(problem.grid), "gain": best[1],
+                         "interval": interval, "interval_of": _parameter(best[0], problem.grid), "weights": tau,
+                         "interval_reaches_box": open_, "profile": profile})
         regions.append(best[0])
-        tau, ll, logZ, edge2 = refit
-        edge = edge or edge2
+        tau, ll, logZ, _, _ = _fit(pm, data, regions, temperature, tau if temperature == "fit" else None, reference)
     seconds["rounds"] = time.perf_counter() - start
     notes += _notes(problem, data, tables, accepted, edge, temperature)
     say(1.0, "done")
@@ -256,8 +268,8 @@ def _notes(problem, data, tables, accepted, edge, temperature):
     notes = []
     if edge:
         notes.append(f"the fitted temperature reached the edge of its search ({1 / ev.TEMPERATURE_RANGE:g} to "
-                     f"{ev.TEMPERATURE_RANGE:g} times the file's {problem.reward.temperature:g}): the task in [reward] "
-                     "(goal, weights) may not be what the demonstrator pursued")
+                     f"{ev.TEMPERATURE_RANGE:g} times the file's {problem.reward.temperature:g}): the goal in [reward] "
+                     "may not be what the demonstrator pursued")
     unscored = sum(int(t["gain"].isna().sum()) for t in tables)
     if unscored:
         notes.append(f"{unscored} candidate(s) could not be scored: no trajectory on the grid respects them from some "
@@ -266,14 +278,14 @@ def _notes(problem, data, tables, accepted, edge, temperature):
         notes.append(f"{data.same_cell:.0%} of the recorded steps end in the cell they began in: the cells are coarse "
                      "for one step of dt; use finer cells or a longer dt")
     if data.inferred:
-        notes.append(f"{data.inferred} steps had no recorded control: their returns use the control of the set whose "
-                     "step best explains the next state (this affects only the fitted temperature)")
+        notes.append(f"{data.inferred} steps had no recorded control: their rewards use the control of the set whose "
+                     "step best explains the next state (this affects only the fitted reward)")
     for a in accepted:
         if a["interval_reaches_box"]:
             notes.append(f"the interval of {a['constraint']} reaches the edge of the box: the data cannot rule out a "
                          "looser one within it")
     if temperature != "fit":
-        notes.append(f"temperature fixed at {temperature:g} (use temperature='fit' for the maximum-likelihood one)")
+        notes.append(f"reward fixed at the file's at temperature {temperature:g} (temperature='fit' fits its weights)")
     return notes
 
 

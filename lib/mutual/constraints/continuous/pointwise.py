@@ -49,8 +49,9 @@ SEGMENT_POINTS = 3      # interior points at which a move's straight segment is 
 class Moves:
     """One step of ``dt`` from points under every control, ``fan`` moves per owner (a cell's samples times
     the controls, or a point's controls), owner by owner: ``point`` and ``successor`` (P, d), ``reward``
-    (P,) r(point, u) dt (not tempered), and the successor on the grid: ``target`` (P, k) cells with
-    ``log_weight`` (P, k) (k = 1: its cell, log 1; barycentric: the d + 1 vertices and log weights)."""
+    (P,) r(point, u) dt (not tempered), the successor on the grid: ``target`` (P, k) cells with
+    ``log_weight`` (P, k) (k = 1: its cell, log 1; barycentric: the d + 1 vertices and log weights), and
+    ``features`` (P, d + m): the reward's features e_i^2 dt and u_j^2 dt (r = -features . weights)."""
 
     point: np.ndarray
     successor: np.ndarray
@@ -58,6 +59,7 @@ class Moves:
     target: np.ndarray
     log_weight: np.ndarray
     fan: int
+    features: np.ndarray
 
     @property
     def n_moves(self):
@@ -71,28 +73,43 @@ class Moves:
 @dataclass(frozen=True, eq=False)
 class PointModel:
     """The grid's cells as points: ``moves`` of every cell (cell by cell), ``points`` (X, M, d) the points a
-    cell stands for, ``terminal`` (X, M) w at them (not tempered)."""
+    cell stands for, ``terminal`` (X, M) w at them (not tempered) and ``terminal_features`` (X, M, d) e_i^2."""
 
     problem: object
     moves: Moves
     points: np.ndarray
     terminal: np.ndarray
+    terminal_features: np.ndarray
 
     @property
     def horizon(self):
         return int(self.problem.horizon)
 
 
+def running_features(problem, x, u):
+    """The quadratic reward's running features (N, d + m): e_i^2 dt and u_j^2 dt (r dt = -features . (q, c))."""
+    return np.hstack([problem.reward.errors(problem.grid, x) ** 2, np.asarray(u, dtype=float) ** 2]) * problem.dt
+
+
+def file_weights(problem, temperature=None):
+    """The weights (2d + m,) of the running and terminal features that give ``problem``'s reward divided by
+    ``temperature`` (default the file's): (q, c, Q) / tau."""
+    r = problem.reward
+    tau = r.temperature if temperature is None else temperature
+    return np.concatenate([r.state_weights, r.control_weights, r.terminal_weights]) / tau
+
+
 def _moves(problem, point, successor, fan):
     """Moves point -> successor (controls varying fastest) with their successors on the grid."""
     g, m = problem.grid, problem.controls.shape[1]
     controls = np.broadcast_to(problem.controls[None], (point.shape[0] // problem.n_actions, problem.n_actions, m))
-    reward = problem.reward.rate(g, point, controls.reshape(-1, m)) * problem.dt
+    features = running_features(problem, point, controls.reshape(-1, m))
+    reward = -features @ np.concatenate([problem.reward.state_weights, problem.reward.control_weights])
     if problem.scheme == "barycentric":
         vertices, weights = kuhn_weights(g, successor)
         with np.errstate(divide="ignore"):
-            return Moves(point, successor, reward, vertices, np.log(weights), fan)
-    return Moves(point, successor, reward, g.cell_of(successor)[:, None], np.zeros((point.shape[0], 1)), fan)
+            return Moves(point, successor, reward, vertices, np.log(weights), fan, features)
+    return Moves(point, successor, reward, g.cell_of(successor)[:, None], np.zeros((point.shape[0], 1)), fan, features)
 
 
 def point_model(problem, progress=None):
@@ -115,10 +132,13 @@ def point_model(problem, progress=None):
         parts.append(_moves(problem, x, successor, A * M))
         if progress is not None:
             progress(int(cells[-1]) + 1, g.n_cells)
-    moves = Moves(*(np.concatenate([getattr(p, f) for p in parts])
-                    for f in ("point", "successor", "reward", "target", "log_weight")), A * M)
-    terminal = problem.reward.terminal(g, points.reshape(-1, g.ndim)).reshape(g.n_cells, M)
-    return PointModel(problem, moves, points, terminal)
+    joined = {f: np.concatenate([getattr(p, f) for p in parts])
+              for f in ("point", "successor", "reward", "target", "log_weight", "features")}
+    moves = Moves(fan=A * M, **joined)
+    flat = points.reshape(-1, g.ndim)
+    terminal = problem.reward.terminal(g, flat).reshape(g.n_cells, M)
+    terminal_features = (problem.reward.errors(g, flat) ** 2).reshape(g.n_cells, M, g.ndim)
+    return PointModel(problem, moves, points, terminal, terminal_features)
 
 
 def point_moves(problem, points):
@@ -145,6 +165,21 @@ def blocked(region, p, q):
             s = k / (SEGMENT_POINTS + 1)
             hit |= region.inside(p + s * (q - p))
     return hit
+
+
+def move_rewards(moves, weights):
+    """The moves' rewards in the model's units: ``weights`` is a temperature tau (a number: r dt / tau) or
+    per-feature weights (2d + m,) (-features . w; the first d + m weigh the running features)."""
+    if np.ndim(weights) == 0:
+        return moves.reward / weights
+    return -(moves.features @ np.asarray(weights)[:moves.features.shape[1]])
+
+
+def terminal_rewards(model, weights):
+    """w / tau at the cells' points (X, M), or -e^2 . (the last d of the per-feature ``weights``)."""
+    if np.ndim(weights) == 0:
+        return model.terminal / weights
+    return -(model.terminal_features @ np.asarray(weights)[-model.terminal_features.shape[2]:])
 
 
 def _log(x):
@@ -184,23 +219,23 @@ def successor_log_values(moves, logZ_next, cell_ok):
     return np.where(mass > 0, value - _log(np.maximum(mass, 1e-300)), -np.inf)
 
 
-def log_partition(model, regions=(), temperature=1.0):
+def log_partition(model, regions=(), weights=1.0):
     """log Z_{C,t} (T+1, X) on the cells for the constraint set ``regions`` (module docstring)."""
     mv = model.moves
     ok = points_allowed(model, regions)
     n_ok, cell_ok = ok.sum(axis=1), ok.any(axis=1)
-    move_reward = np.where(allowed_moves(regions, mv), mv.reward / temperature, -np.inf)
+    move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
     logZ = np.empty((model.horizon + 1, ok.shape[0]))
-    logZ[-1] = _terminal(model, ok, temperature)
+    logZ[-1] = _terminal(model, ok, weights)
     for t in range(model.horizon - 1, -1, -1):
         q = _by_owner(mv, move_reward + successor_log_values(mv, logZ[t + 1], cell_ok))
         logZ[t] = np.where(cell_ok, _logsumexp(q, axis=1) - _log(np.maximum(n_ok, 1)), -np.inf)
     return logZ
 
 
-def _terminal(model, ok, temperature):
+def _terminal(model, ok, weights):
     """log Z_T per cell: log of the mean of exp(w/tau) over the cell's allowed points."""
-    w = np.where(ok, model.terminal / temperature, -np.inf)
+    w = np.where(ok, terminal_rewards(model, weights), -np.inf)
     return np.where(ok.any(axis=1), _logsumexp(w, axis=1) - _log(np.maximum(ok.sum(axis=1), 1)), -np.inf)
 
 
@@ -232,7 +267,7 @@ def _candidate_terms(model, moves, regions, candidates):
     return cell_ok, extra
 
 
-def satisfaction(model, logZ, regions, candidates, temperature, times):
+def satisfaction(model, logZ, regions, candidates, weights, times):
     """F_{C+,t} = Z_{C+,t} / Z_{C,t} (X, K) on the cells at each of ``times`` (a dict t -> array), for the
     ``candidates`` (K regions, each added to ``regions`` = C whose log Z is ``logZ``), by the ratio backup
     F_t(x) = (n_C / n_+) sum over x's allowed moves of pi_C(move) Phi_{C+} (Lambda_C / Lambda_+)
@@ -243,13 +278,13 @@ def satisfaction(model, logZ, regions, candidates, temperature, times):
     ok_plus = np.stack([ok & ~c.inside(pts).reshape(ok.shape) for c in candidates], axis=2)    # (X, M, K)
     n_ratio = _ratio(ok.sum(axis=1)[:, None].astype(float), ok_plus.sum(axis=1).astype(float))   # (X, K)
     cell_ok, extra = _candidate_terms(model, mv, regions, candidates)
-    w = np.where(ok, model.terminal / temperature, -np.inf)
+    w = np.where(ok, terminal_rewards(model, weights), -np.inf)
     with np.errstate(invalid="ignore"):
         share = np.exp(w - logZ[-1][:, None] - _log(ok.sum(axis=1))[:, None])
     share[~np.isfinite(share)] = 0.0
     F = np.einsum("xm,xmk->xk", share, ok_plus) * n_ratio
     out = {model.horizon: F} if model.horizon in times else {}
-    move_reward = np.where(allowed_moves(regions, mv), mv.reward / temperature, -np.inf)
+    move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
     for t in range(model.horizon - 1, -1, -1):
         at = successor_log_values(mv, logZ[t + 1], cell_ok)
         q = move_reward + at
@@ -282,18 +317,58 @@ def _weighted_sums(mv, p, extra, logZ_next, at, F_next):
     return np.einsum("of,ofc->oc", p, _by_owner(mv, at_successor))
 
 
-def point_log_values(moves, logZ_next, allowed, cell_ok, temperature):
+def point_log_values(moves, logZ_next, allowed, cell_ok, weights):
     """log Z_t at continuous points, one exact step ahead of the grid's log Z_{t+1} (``logZ_next`` (X,)):
     log sum_a Phi exp(r dt/tau) Z_{t+1}(f(s, a)) (N,) for the points of ``moves`` (:func:`point_moves`)."""
-    q = np.where(allowed, moves.reward / temperature, -np.inf) + successor_log_values(moves, logZ_next, cell_ok)
+    q = np.where(allowed, move_rewards(moves, weights), -np.inf) + successor_log_values(moves, logZ_next, cell_ok)
     return _logsumexp(_by_owner(moves, q), axis=1)
 
 
-def point_ratios(model, moves, logZ_next, F_next, regions, candidates, temperature):
+def point_ratios(model, moves, logZ_next, F_next, regions, candidates, weights):
     """F_t = Z_{C+,t} / Z_{C,t} at continuous points (N, K), one exact step ahead of the grid's log Z_{C,t+1}
     and F_{t+1} (X, K): E_{a ~ pi_C}[Phi_{C+} F(f(s, a))] (module docstring)."""
     cell_ok, extra = _candidate_terms(model, moves, regions, candidates)
     at = successor_log_values(moves, logZ_next, cell_ok)
-    q = _by_owner(moves, np.where(allowed_moves(regions, moves), moves.reward / temperature, -np.inf) + at)
+    q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
     p = _probabilities(q, _logsumexp(q, axis=1))
     return _weighted_sums(moves, p, extra, logZ_next, at, F_next)
+
+
+def _spread(moves, mass, logZ_next, at, n_cells):
+    """The cells' occupancy (X,) after the moves carry ``mass`` (P,) to their successors, a successor split
+    over its vertices as its value is (lambda Z(vertex) / sum lambda Z)."""
+    if moves.target.shape[1] == 1:
+        return np.bincount(moves.target[:, 0], weights=np.where(np.isfinite(at), mass, 0.0), minlength=n_cells)
+    with np.errstate(invalid="ignore"):
+        share = np.exp(moves.log_weight + logZ_next[moves.target] - at[:, None])
+    share[~np.isfinite(share)] = 0.0
+    return np.bincount(moves.target.ravel(), weights=(mass[:, None] * share).ravel(), minlength=n_cells)
+
+
+def expected_features(model, moves, t0, logZ, regions, weights):
+    """The expected features (d + m running, then d terminal) of the futures from the points of ``moves`` at
+    time ``t0`` to the horizon under ``regions``, summed over the points: Algorithm 1 on the point model (the
+    first step exactly from the points, then the cells' occupancy). Their difference from the
+    demonstrations' features is the gradient of the log-likelihood in the weights."""
+    mv, X, T = model.moves, model.points.shape[0], model.horizon
+    ok = points_allowed(model, regions)
+    cell_ok, n_ok = ok.any(axis=1), ok.sum(axis=1)
+    run = mv.features.shape[1]
+    total = np.zeros(run + model.terminal_features.shape[2])
+    at = successor_log_values(moves, logZ[t0 + 1], cell_ok)
+    q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
+    p = _probabilities(q, _logsumexp(q, axis=1))
+    total[:run] += np.einsum("of,ofk->k", p, _by_owner(moves, moves.features))
+    D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, X)
+    move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
+    for t in range(t0 + 1, T):
+        at = successor_log_values(mv, logZ[t + 1], cell_ok)
+        w = D[:, None] * _probabilities(_by_owner(mv, move_reward + at), logZ[t] + _log(n_ok))
+        total[:run] += np.einsum("of,ofk->k", w, _by_owner(mv, mv.features))
+        D = _spread(mv, w.reshape(-1), logZ[t + 1], at, X)
+    term = np.where(ok, terminal_rewards(model, weights), -np.inf)
+    with np.errstate(invalid="ignore"):
+        share = np.exp(term - logZ[T][:, None] - _log(n_ok)[:, None])
+    share[~np.isfinite(share)] = 0.0
+    total[run:] += np.einsum("x,xm,xmd->d", D, share, model.terminal_features)
+    return total
