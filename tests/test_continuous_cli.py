@@ -64,7 +64,7 @@ def test_infer_continuous_on_the_pendulum_example_through_the_console_script(tmp
     assert (first["name"], first["side"], first["units"]) == ("theta_dot", "upper", "rad/s")
     fastest = pd.read_csv(EXAMPLES / "pendulum_trajectories.csv")["theta_dot"].max()
     assert first["value"] == pytest.approx(fastest) and first["interval_low"] <= first["value"] <= first["interval_high"]
-    assert first["gain"] >= first["needed"] and out["controls_inferred"] == 0 and out["model"] == "points"
+    assert first["gain_refit"] >= first["needed"] and out["controls_inferred"] == 0 and out["model"] == "points"
     for name in ("continuous_ranking.csv", "continuous_chosen.csv", "continuous_constraints.png"):
         assert (tmp_path / name).stat().st_size > 0
     ranking = pd.read_csv(tmp_path / "continuous_ranking.csv")

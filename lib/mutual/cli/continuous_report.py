@@ -77,14 +77,14 @@ def _summary_points(r):
            "min_gain": "the best candidate gains too little"}[r["stopped"]]
     lines.append(f"Stopped: {why}. Accepted constraints ({len(r['chosen'])}):")
     for row in r["chosen"]:
-        lines.append(f"  round {row['round']}: {row['constraint']}, exact gain {row['gain']:.2f} nats "
-                     f"({row['gain'] / r['n_demonstrations']:.3f} per demonstration; needed "
+        lines.append(f"  round {row['round']}: {row['constraint']}, exact gain {row['gain_refit']:.2f} nats "
+                     f"({row['gain_refit'] / r['n_demonstrations']:.3f} per demonstration; needed "
                      f"{row['needed']:.2f}); {row['interval_of']} in [{row['interval_low']:.4g}, "
                      f"{row['interval_high']:.4g}] (likelihood within a factor 20 of the best)")
     rejected = r["best_rejected"]
     if rejected:
-        lines.append(f"  refused: {rejected['constraint']}, exact gain {rejected['gain']:.2f} nats "
-                     f"({rejected['gain'] / r['n_demonstrations']:.3f} per demonstration; needed "
+        lines.append(f"  refused: {rejected['constraint']}, exact gain {rejected['gain_refit']:.2f} nats "
+                     f"({rejected['gain_refit'] / r['n_demonstrations']:.3f} per demonstration; needed "
                      f"{rejected['needed']:.2f})")
     lines += [f"Note: {note}" for note in r["notes"]]
     lines += ["", "gain: the exact increase of the demonstrations' log-likelihood (nats, all demonstrations); "

@@ -10,13 +10,15 @@
    maximum-likelihood weights of its features (the squared errors per coordinate and controls, running and
    terminal: maximum-entropy inverse optimal control, eq. 2.8, concave in the weights; the goal stays the
    file's) under the constraints found so far -- first the temperature, then every weight, within a factor
-   ``TEMPERATURE_RANGE`` of the file's at that temperature -- refitted after each accepted constraint. A hand-written controller is far less variable than a Boltzmann model
+   ``TEMPERATURE_RANGE`` of the file's at that temperature -- refitted under each proposed constraint. A hand-written controller is far less variable than a Boltzmann model
    at one temperature of the file's reward; fitting the weights lets the model be as precise as the
    demonstrator where it is (at its goal, along its path), which is where a less precise model would read
    avoidance into regions no demonstration entered;
 4. each round proposes the most likely member of every family (:mod:`.search`: the tightest consistent
    bound per coordinate and side, the largest consistent disk or box at the best centre) and scores
-   each by its exact log-likelihood gain at the round's reward (refitted after each accepted constraint);
+   each by its exact log-likelihood gain at the round's reward; the best is scored again with the reward's
+   weights refitted under it (the likelihood ratio with the weights profiled out: a constraint and the
+   weights can explain the same avoidance, so a gain at fixed weights would understate it);
 5. **stop rule**: the best candidate is accepted only if its gain is at least ``min_gain`` nats per
    demonstration *and* log(K / ALPHA) nats in all (K: the candidates scored in the round). The first is
    task relevance (Fig. 3.3: only constraints relevant to the task can be identified): with the gain
@@ -49,7 +51,7 @@ from .pointwise import file_weights, point_model
 from .regions import Bound, boundary_distance
 
 MIN_GAIN = math.log(2)   # nats per demonstration: the median unconstrained trajectory crosses it (docstring)
-FIT, REFIT = 40, 15      # L-BFGS-B iterations of the reward's weights: first, and after each accepted constraint
+FIT, REFIT = 40, 15      # L-BFGS-B iterations of the reward's weights: first, and refitted under a candidate
 ALPHA = 0.05        # chance of a false constraint per round; 1 - ALPHA: the interval's coverage
 FAMILIES = ("bound", "disk", "box")
 _PROFILE = np.array([0.0, 0.001, 0.003, 0.01, 0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0])
@@ -111,20 +113,24 @@ class ContinuousInference:
         if self.stop != "min_gain" or not self.rounds:
             return None
         table = self.rounds[-1]
-        return table.iloc[0].to_dict() if len(table) else None
+        refused = table[np.isfinite(table["gain_refit"])]
+        return refused.iloc[0].to_dict() if len(refused) else None
 
 
-def _round_table(number, scored, grid, n_demos, needed, accepted, chosen=None):
+def _round_table(number, scored, grid, n_demos, needed, accepted, refitted, chosen=None):
     """One row per candidate of a round (most likely first): its exact gain at the round's reward in all
-    and per demonstration, F, and the gain the stop rule ``needed``."""
+    and per demonstration, F; the best also its gain with the reward's weights refitted under it
+    (``gain_refit``: the likelihood ratio with the weights profiled out, what the stop rule compares with
+    ``needed``)."""
     rows = []
     order = sorted(range(len(scored)), key=lambda k: -np.nan_to_num(scored[k][1], nan=-np.inf, neginf=-np.inf))
     for rank, k in enumerate(order, start=1):
         region, gain = scored[k]
+        top = region is chosen
         rows.append({"round": number, "rank": rank, "kind": region.kind, "constraint": region.describe(grid),
                      **region.fields(grid), "gain": gain, "gain_per_demo": gain / n_demos,
-                     "F": math.exp(-gain / n_demos) if np.isfinite(gain) else math.nan, "needed": needed,
-                     "accepted": bool(accepted and region is chosen)})
+                     "F": math.exp(-gain / n_demos) if np.isfinite(gain) else math.nan,
+                     "gain_refit": refitted if top else math.nan, "needed": needed, "accepted": bool(accepted and top)})
     return pd.DataFrame(rows)
 
 
@@ -234,23 +240,25 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
         scored, tried = _candidates(pm, data, logZ, regions, families, plane, tau, sizes)
         finite = [s for s in scored if np.isfinite(s[1])]
         if not finite:
-            tables.append(_round_table(number, scored, problem.grid, data.n, math.nan, False))
+            tables.append(_round_table(number, scored, problem.grid, data.n, math.nan, False, math.nan))
             stop = "no candidate"
             break
         best = max(finite, key=lambda s: s[1])
+        refit = _fit(pm, data, regions + [best[0]], temperature, tau if temperature == "fit" else None, reference)
+        gain = refit[1] - ll                         # the exact gain, the reward's weights refitted under it
         needed = max(min_gain * data.n, math.log(max(tried, 1) / ALPHA))
-        ok = best[1] >= needed
-        tables.append(_round_table(number, scored, problem.grid, data.n, needed, ok, best[0]))
+        ok = gain >= needed
+        tables.append(_round_table(number, scored, problem.grid, data.n, needed, ok, gain, best[0]))
         say(0.4 + 0.6 * number / rounds, f"round {number}: {best[0].describe(problem.grid)}")
         if not ok:
             stop = "min_gain"
             break
         interval, open_, profile = likelihood_interval(pm, data, logZ, regions, best[0], best[1], tau)
-        accepted.append({"region": best[0], "constraint": best[0].describe(problem.grid), "gain": best[1],
+        accepted.append({"region": best[0], "constraint": best[0].describe(problem.grid), "gain": gain,
                          "interval": interval, "interval_of": _parameter(best[0], problem.grid), "weights": tau,
                          "interval_reaches_box": open_, "profile": profile})
         regions.append(best[0])
-        tau, ll, logZ, _, _ = _fit(pm, data, regions, temperature, tau if temperature == "fit" else None, reference)
+        tau, ll, logZ = refit[:3]
     seconds["rounds"] = time.perf_counter() - start
     notes += _notes(problem, data, tables, accepted, edge, temperature)
     say(1.0, "done")
