@@ -1,5 +1,5 @@
-"""The package's architecture (issue 11): the thrusts apart, the machinery never imported by the
-algorithms, no import circles, no module too long to hold in mind."""
+"""The package's architecture: the thrusts apart, the machinery never imported by the algorithms, no import
+circles, no module too long to hold in mind."""
 
 import ast
 from pathlib import Path

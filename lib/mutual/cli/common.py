@@ -14,7 +14,9 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+from .. import budget
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 
 class InputError(Exception):
@@ -34,15 +36,24 @@ def add_output_options(parser):
     group.add_argument("--json", action="store_true",
                        help="print the results as one JSON object on stdout instead of the readable summary")
     group.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    size = parser.add_argument_group("size")
+    size.add_argument("--allow-large", action="store_true",
+                      help="go ahead even when the work is estimated to need more memory than is available, or more "
+                           f"than ${budget.MINUTES_ENV} minutes (default {budget.MINUTES}); without it such a request "
+                           "is refused before it starts, with the estimate")
+
+
+_INPUTS = []   # the input files of the running command (an output set never replaces one)
 
 
 def existing_file(path):
-    """``path`` as a Path, or an InputError if it names no readable file."""
+    """``path`` as a Path, or an InputError if it names no readable file; remembered as an input of the run."""
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such file")
     if not path.is_file():
         raise InputError(f"{path}: not a file")
+    _INPUTS.append(path)
     return path
 
 
@@ -53,7 +64,7 @@ def about(path):
     import pandas as pd
     try:
         yield
-    except InputError:
+    except (InputError, budget.TooLarge):
         raise
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: the file is empty (expected a header row and data rows)") from None
@@ -117,51 +128,48 @@ def integer_column(frame, column, path, allow_empty=False):
         raise InputError(f"{path}: column {column!r}, line {int(frame.index[row]) + 2}: {what}")
 
 
-def output_path(args, name):
-    """``args.out / name``, refusing an ``--out`` that is a file (one file at a time: prefer :func:`output_set`)."""
-    check_out(args)
-    return Path(args.out) / name
-
-
-def write_csv(frame, path, **to_csv):
-    """Write a DataFrame atomically, numbers exactly unless ``float_format`` says otherwise (one file at a
-    time: prefer :func:`output_set`)."""
-    from ..atomic import atomic_path
-    from ..csvfile import format_exact
-    with atomic_path(path) as tmp:
-        frame.to_csv(tmp, index=False, **{"float_format": format_exact, **to_csv})
-    return Path(path)
-
-
-def save_figure(fig, path):
-    """Save a matplotlib figure atomically (PNG, 150 dpi) and close it (one file at a time: prefer :func:`output_set`)."""
-    import matplotlib.pyplot as plt
-    from ..atomic import atomic_path
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=150, bbox_inches="tight", metadata={"Software": None})
-    plt.close(fig)
-    return Path(path)
-
-
 def check_out(args):
-    """Refuse an ``--out`` that exists and is not a folder (before any work is done)."""
+    """Refuse an ``--out`` that exists and is not a folder, or is a link that leads nowhere (before any work)."""
     out = getattr(args, "out", None)
-    if out is not None and Path(out).exists() and not Path(out).is_dir():
+    if out is None:
+        return
+    out = Path(out)
+    if out.is_symlink() and not out.exists():
+        raise InputError(f"--out {out}: a symbolic link that leads to no folder ({_link_target(out)}); remove it or "
+                         "point it at a folder")
+    if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: exists and is not a folder")
+
+
+def _link_target(link):
+    try:
+        return f"it points to {os.readlink(link)}, which does not exist or loops back"
+    except OSError as err:
+        return err.strerror or str(err)
+
+
+STAGING = ".mutual-partial-"      # the hidden folder inside --out where a run's files wait for the commit
 
 
 class OutputSet:
     """The files of one run, written into a temporary folder (see :func:`output_set`)."""
 
-    def __init__(self, out, staging):
+    def __init__(self, out, staging, inputs=()):
         self.out, self.staging, self.names = Path(out), Path(staging), []
+        self.inputs = list(inputs)
 
     def path(self, name):
-        """Where to write the output ``name`` now; returns the staging path (the file lands in --out on success)."""
+        """Where to write the output ``name`` now; returns the staging path (the file lands in --out on success).
+        Raises InputError when the output would replace one of the run's input files."""
         if Path(name).name != name or name.startswith("."):
             raise ValueError(f"an output name must be a plain file name, got {name!r}")
         if name in self.names:
             raise ValueError(f"output {name!r} written twice")
+        final = self.final(name)
+        for source in self.inputs:
+            if final.exists() and source.exists() and os.path.samefile(final, source):
+                raise InputError(f"--out {self.out}: the output {name} would replace the input {source}; choose "
+                                 "another --out (nothing was written)")
         self.names.append(name)
         return self.staging / name
 
@@ -188,45 +196,59 @@ class OutputSet:
 def output_set(args):
     """Write a command's outputs as a set: ``with output_set(args) as files: files.csv(table, "a.csv"); ...``.
 
-    The files go into a hidden temporary folder -- next to ``--out`` when it does not exist yet (then
-    renamed to it), else inside it (then each file is renamed into ``--out``) -- so a run that fails
-    while writing (a full disk, an error in a figure, Ctrl-C) leaves none of its outputs, and a run that
-    succeeds leaves all of them. A write that fails raises :class:`OutputError` naming ``--out``.
+    The run holds ``--out``'s lock (:mod:`mutual.folder_lock`, the notebook runner's too) from the first file
+    to the last, so a second run into the same folder stops at once instead of mixing its files with these.
+    The files go into a hidden staging folder inside ``--out`` and are renamed into it when all are written,
+    so a run that fails while writing (a full disk, an error in a figure, Ctrl-C, SIGTERM) leaves none of its
+    outputs, and a run that succeeds leaves all of them; a staging folder that a killed run left behind is
+    removed by the next run into that folder. An ``--out`` this run created is removed again when it stays
+    empty. An output never replaces one of the run's input files. A write that fails raises
+    :class:`OutputError` naming ``--out``.
     """
     import shutil
     import tempfile
+    from ..folder_lock import FolderBusy, hold
     out = Path(args.out)
     check_out(args)
-    fresh = not out.exists()
+    created = not out.exists()
     try:
-        (out.parent if fresh else out).mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name or 'out'}.partial-", dir=out.parent if fresh else out))
+        out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
-    files = OutputSet(out, staging)
+    done = False
     try:
-        try:
-            yield files
-        except OSError as err:
-            raise OutputError(f"--out {out}: could not write {Path(err.filename or '').name or 'the outputs'} "
-                              f"({err.strerror or err}); no output was left") from None
-        _commit(files, fresh)
+        with hold(out, lambda: f"--out {out}: another run is writing its outputs there now; let it finish, or "
+                               "choose another --out"):
+            for stale in out.glob(f"{STAGING}*"):     # left by a run killed while writing (we hold the folder)
+                shutil.rmtree(stale, ignore_errors=True)
+            try:
+                staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=out))
+            except OSError as err:
+                raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
+            files = OutputSet(out, staging, _INPUTS)
+            try:
+                try:
+                    yield files
+                except OSError as err:
+                    raise OutputError(f"--out {out}: could not write {Path(err.filename or '').name or 'the outputs'} "
+                                      f"({err.strerror or err}); no output was left") from None
+                _commit(files)
+                done = True
+            finally:
+                shutil.rmtree(staging, ignore_errors=True)
+    except FolderBusy as err:
+        raise InputError(str(err)) from None
     finally:
-        shutil.rmtree(staging, ignore_errors=True)
+        if created and not done:
+            try:
+                out.rmdir()                         # only when empty: what another run put there stays
+            except OSError:
+                pass
 
 
-def _commit(files, fresh):
-    """Move the staged files into --out: one rename of the folder, or one rename per file."""
+def _commit(files):
+    """Move the staged files into --out, one rename each (the folder is held, so no other run interleaves)."""
     out, staging = files.out, files.staging
-    if fresh:
-        try:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(staging, 0o777 & ~umask)        # a folder as mkdir makes it, not mkdtemp's 0700
-            os.rename(staging, out)
-            return
-        except OSError:
-            out.mkdir(parents=True, exist_ok=True)   # --out appeared meanwhile: move file by file
     clash = [n for n in files.names if (out / n).is_dir()]
     if clash:
         raise OutputError(f"--out {out}: {clash[0]!r} is a folder there; no output was written")
@@ -280,12 +302,27 @@ def report(args, summary, results):
 def run(args, prog):
     """Run ``args.handler(args)``; report bad input in one line (exit 2), never a traceback.
 
+    Every command runs within the limits of :mod:`mutual.budget` (``$MUTUAL_MAX_MINUTES`` and the memory
+    available; ``--allow-large`` lifts them): a request estimated beyond them is refused before it starts.
     Set ``MUTUAL_DEBUG=1`` to see the traceback of an unexpected error.
     """
+    _INPUTS.clear()
+    restore = _terminate_cleanly()
     try:
         check_out(args)
-        args.handler(args)
+        try:
+            minutes = budget.command_line_minutes()
+        except ValueError as err:
+            raise InputError(str(err)) from None
+        with budget.limits(minutes, getattr(args, "allow_large", False), "--allow-large"):
+            args.handler(args)
         return EXIT_OK
+    except budget.TooLarge as err:
+        return _fail(prog, str(err), EXIT_BAD_INPUT)
+    except MemoryError as err:        # what the estimate missed: one line, never a traceback
+        detail = f" ({_first_line(err)})" if str(err) else ""
+        return _fail(prog, f"ran out of memory{detail}; ask for less (fewer cells, steps, levels or demonstrations)",
+                     EXIT_FAILED)
     except InputError as err:
         return _fail(prog, str(err), EXIT_BAD_INPUT)
     except OutputError as err:
@@ -295,6 +332,8 @@ def run(args, prog):
         return _fail(prog, f"{where}{err.strerror or err}", EXIT_BAD_INPUT)
     except KeyboardInterrupt:
         return _fail(prog, "interrupted", EXIT_INTERRUPTED)
+    except Terminated:
+        return _fail(prog, "terminated (SIGTERM); no output of this run was left", EXIT_TERMINATED)
     except BrokenPipeError:           # the reader of stdout left (| head): the outputs are written; say nothing
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
@@ -303,6 +342,26 @@ def run(args, prog):
             raise
         return _fail(prog, f"{type(err).__name__}: {_first_line(err)} (set MUTUAL_DEBUG=1 for the traceback)",
                      EXIT_FAILED)
+    finally:
+        restore()
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived: raised where the command is, so that its output set cleans up as for Ctrl-C."""
+
+
+def _terminate_cleanly():
+    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only); returns the undo."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def terminated(signum, frame):
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, terminated)
+    return lambda: signal.signal(signal.SIGTERM, previous)
 
 
 def _fail(prog, message, status):

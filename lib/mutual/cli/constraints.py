@@ -7,6 +7,7 @@ its maximum-likelihood threshold psi* (eq. 3.3) and one constraint per action
 (Algorithm 4, eq. 2.25; :func:`mutual.constraints.greedy_inference`), until the stop rule fires.
 """
 
+from .. import budget
 from . import common, continuous
 
 DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 10, 0.1, 5
@@ -125,6 +126,7 @@ def run_infer(args):
     with common.about(world_path):
         grid = load_world(world_path)
     mdp = grid.mdp
+    budget.check(budget.gridworld_inference(mdp.n_states, mdp.n_actions, mdp.horizon, args.rounds))
     frame = common.read_csv(demos_path)        # the columns first, naming the line of a bad entry
     common.require_columns(frame, ("demo", "t", "state", "action"), demos_path)
     for column in ("demo", "t", "state"):

@@ -9,7 +9,8 @@ true dynamics that respects --hidden constraints) or of a gridworld (chapter 3's
 Heavy libraries are imported inside the commands.
 """
 
-from . import common
+from .. import budget
+from . import common, continuous_sizes
 
 DEFAULT_ROUNDS, DEFAULT_TOP = 5, 5
 MIN_GAIN = {"points": 0.693, "cells": 0.1}   # inference.MIN_GAIN = log 2 (no numpy here; a test checks)
@@ -170,6 +171,7 @@ def _with_overrides(args, problem, system_path):
 def run_infer_continuous(args):
     _check_options(args)
     traj_path, system_path = common.existing_file(args.trajectories), common.existing_file(args.system)
+    continuous_sizes.check_inference(system_path, args)      # before the grid is built
     from ..constraints.continuous import infer, load_system, read_recording
     from ..constraints.continuous.mapping import check_recording
     with common.about(system_path):
@@ -230,6 +232,7 @@ def _simulate_system(args):
     from ..constraints.continuous import demonstrators as dm
     from ..constraints.continuous import load_system, parse_region, write_recording
     path = common.existing_file(args.system)
+    continuous_sizes.check_simulation(path, args)            # before the grid is built
     with common.about(path):
         spec = load_system(path)
     problem, sim = spec.problem, dict(spec.simulate)
@@ -309,6 +312,7 @@ def _simulate_world(args):
     if any(not 0 <= p <= 1 for p in psi):
         raise common.InputError("--hidden: psi must lie in [0, 1]")
     n, seed = args.n or 100, args.seed or 0
+    budget.check(budget.demonstrations(n, grid.mdp.horizon))
     with common.about(path):
         mask = constraint_mask(grid.mdp, states, psi if psi else 0.0, actions)
         demos = sample_demonstrations(grid.mdp, n, mask, rng=seed)

@@ -6,6 +6,7 @@ anticipation, eq. 6.16; the multi-distractor QP of section 6.5 with ``eta``) or 
 car), and writes the trajectory as CSV and a figure beside the predictable (H1-optimal) motion.
 """
 
+from .. import budget
 from . import common
 
 DESCRIPTION = """\
@@ -70,6 +71,7 @@ def run_legible(args):
     path = common.existing_file(args.spec)
     with common.about(path):
         spec = load_legible_spec(path)
+    budget.check(budget.legible(spec.steps, 1 + len(spec.distractors), spec.dynamics))     # before the solve starts
     with common.progress(args, total=1, desc=f"solving ({spec.method})", unit="problem") as bar:
         with common.about(path):
             solution = solve_legible(spec)

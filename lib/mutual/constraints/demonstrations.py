@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .. import budget
 from ..atomic import atomic_path
 from ..csvfile import check_header
 from ..seeds import generator
@@ -92,15 +93,17 @@ def check_demonstrations(mdp, demos):
     return demos
 
 
-def sample_demonstrations(mdp, n, mask=None, rng=None):
+def sample_demonstrations(mdp, n, mask=None, rng=None, allow_large=None):
     """Sample ``n`` trajectories of T steps from the constrained Boltzmann policy (eq. 2.19).
 
-    Starts are drawn from ``mdp.initial``; ``rng`` is a seed or numpy Generator.
+    Starts are drawn from ``mdp.initial``; ``rng`` is a seed or numpy Generator; ``allow_large`` as
+    :func:`mutual.budget.check` (``n`` trajectories are held in memory).
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n: must be a positive integer, got {n!r}")
     if not isinstance(mdp, MDP):
         raise TypeError(f"mdp: must be an MDP, got {type(mdp).__name__}")
+    budget.check(budget.demonstrations(n, mdp.horizon), allow_large)
     rng = generator(rng, "rng")
     pi = soft_policy(mdp, check_mask(mdp, mask))
     if np.any(pi[0].sum(axis=1)[mdp.initial > 0] == 0):

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import budget
 from ..tomlfile import read_toml
 
 DYNAMICS = ("single-integrator", "dubins")
@@ -261,7 +262,7 @@ def _costs(spec):
     return J1, J0s
 
 
-def solve_legible(spec):
+def solve_legible(spec, allow_large=None):
     """The legible and the predictable (H1-optimal) motion of ``spec``.
 
     Returns a dict: ``legible`` and ``predictable`` as ``(xs (N+1, n), us (N, m))``, ``method``,
@@ -269,10 +270,12 @@ def solve_legible(spec):
     single integrator; negative values favour the goal) or, for the Dubins car, ``J_1 - J_0``
     (equal to ``log Lambda`` up to a constant) -- and ``alphas`` (the weight in force at each
     step) or ``duals`` (the QP's multipliers) where they apply. A ValueError names the key when the
-    spec asks for what cannot be solved or represented; no output is ever NaN or infinite.
+    spec asks for what cannot be solved or represented; no output is ever NaN or infinite. ``allow_large``:
+    as :func:`mutual.budget.check` (the work grows with the steps times the goals).
     """
     if not isinstance(spec, LegibleSpec):
         raise ValueError("spec must be a LegibleSpec (use legible_spec or load_legible_spec)")
+    budget.check(budget.legible(spec.steps, 1 + len(spec.distractors), spec.dynamics), allow_large)
     if spec.dynamics == "dubins":
         from .spec_dubins import solve_dubins
         out = solve_dubins(spec)

@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .. import budget
 from .cells import cell_table
 from .data import LIKERT_RANGE
 from .errors import DegenerateDataError
@@ -230,23 +231,30 @@ def _anova_from(data, dv, within, subject, aggregate, levels):
     return rm_anova(data, dv, within, subject, aggregate, levels)
 
 
-def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=None):
+def _check_pairs(levels, subjects, allow_large):
+    """Refuse, before any pair is tested, all pairs of more levels than the limits allow (:mod:`mutual.budget`)."""
+    budget.check(budget.anova(levels, subjects), allow_large)
+
+
+def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=None, allow_large=None):
     """All-pairs Tukey HSD with the repeated-measures error term of an :class:`RMAnova` (or of
     ``rm_anova(anova, dv, within, subject, ...)`` when given long data). Columns A, B, mean_A,
-    mean_B, diff, q, p."""
+    mean_B, diff, q, p. ``allow_large``: as :func:`mutual.budget.check` (k levels are k (k-1) / 2 pairs)."""
     res = _anova_from(anova, dv, within, subject, aggregate, levels)
+    _check_pairs(len(res.levels), res.n_subjects, allow_large)
     if res.root_mse > 0:                  # the error term's root, exact at any scale (mse may underflow)
         return tukey_from_root_mse(res.means, res.root_mse, res.n_subjects)
     return tukey_from_summary(res.means, res.mse, res.n_subjects)
 
 
-def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, levels=None):
+def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, levels=None, allow_large=None):
     """Paired t-tests between all pairs of levels, Holm-corrected.
 
     ``cells``: a subject x level table (wide), an :class:`RMAnova` (its cells), or long data with
     ``dv``, ``within`` and ``subject`` named (as :func:`rm_anova`). Returns a DataFrame with
     columns A, B, mean_diff, t, df, p, p_holm. A pair whose differences are all equal (identical
-    levels included) has no defined t: :class:`DegenerateDataError` names the pair.
+    levels included) has no defined t: :class:`DegenerateDataError` names the pair. ``allow_large``: as
+    :func:`tukey_rm`.
     """
     if isinstance(cells, RMAnova):
         wide = cells.cells
@@ -266,6 +274,7 @@ def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, lev
         raise ValueError(f"cells must be a subject x level table with >= 2 subjects and >= 2 levels, got shape {y.shape}")
     if not np.isfinite(y).all():
         raise ValueError("cells must be a complete table of finite numbers (no NaN: every subject needs every level)")
+    _check_pairs(y.shape[1], y.shape[0], allow_large)
     rows = []
     e = _exponent(y)
     z = np.ldexp(y, -e)                   # t is scale-free; the squares stay representable (1e-170 or 1e170)
@@ -296,16 +305,17 @@ def holm(p):
     return out
 
 
-def pairwise_comparisons(anova, as_records=False):
+def pairwise_comparisons(anova, as_records=False, allow_large=None):
     """Every pair of levels of an :class:`RMAnova`: the RM-error Tukey HSD (``q``, ``p_tukey``) beside the
     paired t-test with Holm's correction (``t``, ``df``, ``p_t``, ``p_holm``), one row per pair with
     ``A``, ``B``, ``mean_A``, ``mean_B`` and ``diff = mean_A - mean_B``. ``as_records=True`` returns a list
     of dicts of plain Python numbers and strings (ready for JSON). Raises :class:`DegenerateDataError` as
-    :func:`paired_t_holm` does."""
+    :func:`paired_t_holm` does, and :class:`mutual.budget.TooLarge` for more pairs than the limits allow
+    (``allow_large`` as :func:`tukey_rm`)."""
     if not isinstance(anova, RMAnova):
         raise ValueError(f"anova must be an RMAnova, got {type(anova).__name__}")
-    tukey = tukey_rm(anova).rename(columns={"p": "p_tukey"})
-    paired = paired_t_holm(anova).rename(columns={"p": "p_t"}).drop(columns="mean_diff")
+    tukey = tukey_rm(anova, allow_large=allow_large).rename(columns={"p": "p_tukey"})
+    paired = paired_t_holm(anova, allow_large=allow_large).rename(columns={"p": "p_t"}).drop(columns="mean_diff")
     table = tukey.merge(paired, on=["A", "B"], how="left")
     if not as_records:
         return table

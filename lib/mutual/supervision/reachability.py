@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from .. import __version__
+from .. import __version__, budget
 from . import value_cache, value_function
 from .dubins import SPEED, DubinsCar, _check_positive, _real, unsafe_reach
 from .value_function import (FULL_GRID, METHODS, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary,  # noqa: F401
@@ -205,7 +205,7 @@ def closed_form_values(w_max, obstacle_radius, grid_spec, speed=SPEED, tol=1e-9)
 
 
 def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSpec(), speed=SPEED, d_max=0.0,
-                  batch="loop", cache=True, progress=True, method="hj"):
+                  batch="loop", cache=True, progress=True, method="hj", allow_large=None):
     """Converged avoid value functions of eq. (4.3) for each ``w_max`` (Fig. 4.2, the library of eq. 4.12).
 
     ``method="hj"`` (default; the thesis's method, Sec. 5.2.1): hj-reachability, one compiled solver
@@ -216,8 +216,13 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
     ``method="closed-form"``: the exact value of :func:`~mutual.supervision.dubins.avoid_value_closed_form`
     at the grid nodes, for trying things out (no solver, no cache; the whole library in about a
     second). Only without a disturbance: ``d_max > 0`` is refused (the HJI solver is the only method then).
+
+    ``allow_large``: as :func:`mutual.budget.check`: the library's memory is checked before anything is
+    loaded, and the time of the members to compute before any is solved.
     """
     w = _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_max, batch, method)
+    budget.check(budget.value_library(len(w), grid_spec.shape, len(w) if method == "closed-form" else 0, method),
+                 allow_large)
     if method == "closed-form":
         members = tuple(ValueFunction(float(wi), float(obstacle_radius), grid_spec,
                                       closed_form_values(wi, obstacle_radius, grid_spec, speed), float(speed), 0.0,
@@ -233,6 +238,7 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
             if stored is not None:
                 found[wi] = stored
     missing = [wi for wi in w if wi not in found]
+    budget.check(budget.value_library(len(w), grid_spec.shape, len(missing), method), allow_large)
     if missing:
         for wi, v, h in _converge(missing, obstacle_radius, speed, d_max, grid_spec, solver, batch, progress):
             found[wi] = (v, h)

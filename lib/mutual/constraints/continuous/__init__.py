@@ -8,7 +8,7 @@ chance thresholds and greedy inference:
 * :mod:`.systems` -- continuous dynamics x' = f(x, u): named systems and your own ``module:function``;
 * :mod:`.grid`, :mod:`.problem`, :mod:`.systemfile` -- the box and its cells, the controls, the
   task, the tabular MDP, and the system TOML file that describes them;
-* :mod:`.discretization`, :mod:`.cluster` -- S(x, a, x') by Monte Carlo within cells or by
+* :mod:`.discretization` -- S(x, a, x') by Monte Carlo within cells or by
   Kuhn-triangulation interpolation, in chunks that run in one process or on Dask;
 * :mod:`.recordings`, :mod:`.mapping` -- recorded trajectories (CSV), aligned to the time step and
   mapped to cells and actions (controls inferred where they were not recorded);
