@@ -20,6 +20,7 @@ from .recordings import align
 
 TEMPERATURE_RANGE = 100.0   # the fitted temperature is searched within [tau / 100, tau * 100] of the file's
 TEMPERATURE_TOLERANCE = 0.05   # in log tau: the fitted temperature within 5 %
+BATCH = 16                     # candidates scored together
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,7 +116,11 @@ def log_likelihood_gradient(model, data, regions, weights, logZ):
 def candidate_gains(model, data, logZ, regions, candidates, weights):
     """The exact log-likelihood gain (total over demonstrations, (K,)) of adding each of ``candidates`` to
     ``regions`` (module docstring): nan where the grid has no trajectory that respects the candidate from a
-    demonstrated start or end (F = 0 there, though the demonstration itself respects it)."""
+    demonstrated start or end (F = 0 there, though the demonstration itself respects it). Scored
+    ``BATCH`` candidates at a time (memory: moves x batch)."""
+    if len(candidates) > BATCH:
+        return np.concatenate([candidate_gains(model, data, logZ, regions, candidates[k:k + BATCH], weights)
+                               for k in range(0, len(candidates), BATCH)])
     if not candidates:
         return np.zeros(0)
     L = data.steps
@@ -170,7 +175,7 @@ def fit_weights(model, data, regions, start, reference, iterations=40, cap=TEMPE
         return -ll, -scale * log_likelihood_gradient(model, data, regions, w, logZ)
 
     best = minimize(negative, np.clip(np.asarray(start, dtype=float) / scale, 0.0, cap), jac=True, method="L-BFGS-B",
-                    bounds=[(0.0, cap)] * start.size, options={"maxiter": iterations, "ftol": 1e-9, "gtol": 1e-6})
+                    bounds=[(0.0, cap)] * start.size, options={"maxiter": iterations, "ftol": 1e-7, "gtol": 1e-5})
     z = best.x
     ll, logZ = cache[z.tobytes()] if z.tobytes() in cache else log_likelihood(model, data, regions, scale * z)
     return scale * z, ll, logZ

@@ -51,7 +51,7 @@ from .pointwise import file_weights, point_model
 from .regions import Bound, boundary_distance
 
 MIN_GAIN = math.log(2)   # nats per demonstration: the median unconstrained trajectory crosses it (docstring)
-FIT, REFIT = 40, 15      # L-BFGS-B iterations of the reward's weights: first, and refitted under a candidate
+FIT, REFIT = 25, 10      # L-BFGS-B iterations of the reward's weights: first, and refitted under a candidate
 ALPHA = 0.05        # chance of a false constraint per round; 1 - ALPHA: the interval's coverage
 FAMILIES = ("bound", "disk", "box")
 _PROFILE = np.array([0.0, 0.001, 0.003, 0.01, 0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0])
