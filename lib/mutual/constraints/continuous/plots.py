@@ -127,7 +127,8 @@ def inference_figure(inference, truth=(), title=None, width=110):
         if grid.ndim == 2 and hasattr(inference, "candidates"):
             shade_cells(ax, grid, [int(inference.candidates.candidates.index[k]) for k in inference.result.chosen
                                    if inference.candidates.regions[k] is None])
-    axes[0][0].legend(fontsize=7, loc="best")
+    if axes[0][0].get_legend_handles_labels()[0]:
+        axes[0][0].legend(fontsize=7, loc="best")
     chosen = "; ".join(f"{n}: {label}" for n, label in enumerate(inference.labels(), 1))
     text = title or f"inferred, by round: {chosen or 'none'}"
     fig.suptitle("\n".join(textwrap.wrap(text, width)), fontsize=8)
