@@ -50,8 +50,8 @@ def run_json(capsys, *argv):
 
 
 def test_infer_continuous_on_the_pendulum_example_through_the_console_script(tmp_path):
-    """The example's hidden limit is theta_dot <= 5 rad/s; on its 41 x 41 cells (0.39 rad/s wide) the
-    first constraint is that bound, within two cell widths."""
+    """The example's hidden limit is theta_dot <= 5 rad/s: the accepted constraint is that bound at the
+    fastest recorded speed (the tightest bound the demonstrations satisfy), inside its likelihood interval."""
     command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "mutual.cli"]
     run = subprocess.run(command + ["constraints", "infer-continuous", str(EXAMPLES / "pendulum_trajectories.csv"),
                                     "--system", str(EXAMPLES / "pendulum.toml"), "--json", "--out", str(tmp_path)],
@@ -60,30 +60,33 @@ def test_infer_continuous_on_the_pendulum_example_through_the_console_script(tmp
     out = json.loads(run.stdout)
     first = out["chosen"][0]
     assert (first["name"], first["side"], first["units"]) == ("theta_dot", "upper", "rad/s")
-    assert abs(first["value"] - 5.0) <= 2 * 16 / 41
-    assert out["controls"]["recorded_snapped"] == 20 * 60 and out["controls"]["inferred"] == 0
+    fastest = pd.read_csv(EXAMPLES / "pendulum_trajectories.csv")["theta_dot"].max()
+    assert first["value"] == pytest.approx(fastest) and first["interval_low"] <= first["value"] <= first["interval_high"]
+    assert first["gain_refit"] >= first["needed"] and out["controls_inferred"] == 0 and out["model"] == "points"
     for name in ("continuous_ranking.csv", "continuous_chosen.csv", "continuous_constraints.png"):
         assert (tmp_path / name).stat().st_size > 0
     ranking = pd.read_csv(tmp_path / "continuous_ranking.csv")
-    assert {"round", "rank", "constraint", "psi", "F", "neg_log_F", "exact_gain", "chosen"} <= set(ranking.columns)
+    assert {"round", "rank", "constraint", "gain", "gain_per_demo", "F", "needed", "accepted"} <= set(ranking.columns)
 
 
 def test_infer_continuous_on_the_car_example_infers_its_controls(tmp_path, capsys):
     out = run_json(capsys, "constraints", "infer-continuous", EXAMPLES / "unicycle_trajectories.csv", "--system",
                    EXAMPLES / "unicycle.toml", "--cells", "13,10,8", "--rounds", "1", "--families", "disk",
                    "--out", tmp_path)
-    assert out["controls"]["inferred"] == 20 * 28 and out["controls"]["recorded_snapped"] == 0
+    assert out["controls_inferred"] == 20 * 28
     assert out["ranking"][0][0]["constraint"].startswith("disk at (x, y)")
 
 
-def test_simulate_then_infer_finds_the_hidden_limit_of_a_fresh_recording(tmp_path, capsys):
+@pytest.mark.parametrize("model", ["points", "cells"])
+def test_simulate_then_infer_finds_the_hidden_limit_of_a_fresh_recording(tmp_path, capsys, model):
     (tmp_path / "di.toml").write_text(DOUBLE_INTEGRATOR)
     made = run_json(capsys, "constraints", "simulate", "--system", tmp_path / "di.toml", "--out", tmp_path / "sim")
     assert made["ranges"]["velocity"][1] <= 0.5 and made["period_seconds"] == pytest.approx(0.1)
     frame = pd.read_csv(tmp_path / "sim" / "trajectories.csv", dtype={"demo": str})
     assert list(frame.columns) == ["demo", "t", "position", "velocity", "acceleration"]
     out = run_json(capsys, "constraints", "infer-continuous", tmp_path / "sim" / "trajectories.csv", "--system",
-                   tmp_path / "di.toml", "--inline", "--out", tmp_path / "inferred")
+                   tmp_path / "di.toml", "--model", model, *(["--inline"] if model == "cells" else []),
+                   "--out", tmp_path / "inferred")
     first = out["chosen"][0]
     assert first["constraint"].startswith("velocity <=") and abs(first["value"] - 0.5) <= 0.2 + 1e-9
     assert out["n_demonstrations"] == 20 and out["steps"] == 20
@@ -135,6 +138,16 @@ def test_simulate_that_fails_while_writing_leaves_no_output(tmp_path, capsys, mo
       "--cells", "41,x"], ["--cells 41,x"]),
     (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
       "--families", "blob"], ["--families blob", "unknown family 'blob'"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--families", "bound,cell"], ["--families", "'cell' candidates need --model cells"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--temperature", "-1"], ["--temperature -1", "'fit', 'file' or a positive number"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--temperature", "warm"], ["--temperature warm"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--model", "cells", "--temperature", "2"], ["--temperature", "--model points"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--min-gain", "-1"], ["--min-gain -1"]),
     (["simulate", "--system", EXAMPLES / "pendulum.toml", "--hidden", "omega < 3"], ["--hidden", "'omega'"]),
     (["simulate", "--world", EXAMPLES / "world.toml", "--hidden", "cell 99 0"], ["--hidden 'cell 99 0'"]),
 ])
@@ -154,6 +167,8 @@ def test_help_names_the_formats(capsys):
         assert phrase in capsys.readouterr().out
 
 
-def test_the_command_line_spells_out_the_candidate_families():
+def test_the_command_line_spells_out_the_candidate_families_and_defaults():
+    from mutual.constraints.continuous import inference
     from mutual.constraints.continuous.candidates import FAMILIES
-    assert cli_continuous.FAMILIES == FAMILIES
+    assert cli_continuous.FAMILIES == FAMILIES and set(inference.FAMILIES) == set(FAMILIES) - {"cell"}
+    assert cli_continuous.MIN_GAIN["points"] == round(inference.MIN_GAIN, 3)

@@ -44,12 +44,18 @@ def test_extensions_are_reported_apart_from_the_verdicts(claims_file):
     from mutual.compendium.results import write_extensions
     write_results("09_demo", {"c9-abs": entry(0.3, scan=scan())})
     write_extensions("09_demo", {"power-n80": {"statement": "N for 80% power", "value": 14,
-                                               "computed_by": "mutual.study.stats.rm_anova"}})
+                                               "computed_by": "mutual.study.stats.rm_anova"},
+                                 "cited-claim": {"statement": "[67]: a claim", "value": "9 of 10", "verdict": "undetermined",
+                                                 "computed_by": "mutual.study.stats.rm_anova"}})
     text = build_report().read_text()
     summary, extensions = text.split("## Extensions beyond the thesis")
-    assert "1 reproduced" in summary and "N for 80% power | 14 | yes | mutual.study.stats.rm_anova" in extensions
+    assert "1 reproduced" in summary and "N for 80% power | 14 |  | yes | mutual.study.stats.rm_anova" in extensions
+    assert "[67]: a claim | 9 of 10 | undetermined | yes |" in extensions and "1 undetermined" not in summary
     with pytest.raises(ValueError, match="computed_by"):
         write_extensions("09_demo", {"x": {"statement": "s", "value": 1}})
+    with pytest.raises(ValueError, match="verdict 'fine'"):
+        write_extensions("09_demo", {"x": {"statement": "s", "value": 1, "verdict": "fine",
+                                           "computed_by": "mutual.study.stats.rm_anova"}})
 
 
 def test_readme_states_the_reports_verdict_counts():

@@ -173,23 +173,27 @@ def write_extensions(notebook, results):
     never counted among the thesis's verdicts.
 
     ``results`` maps a short key to a dict with ``statement`` (what was measured), ``value``,
-    ``computed_by`` (the library function), and optionally ``note`` and ``simulated`` (default True).
+    ``computed_by`` (the library function), and optionally ``note``, ``simulated`` (default True) and,
+    for a claim of another publication checked here, its ``verdict`` by CLAIMS.md's rules.
     """
+    from .claims import VERDICTS
     entries = {}
     for key, entry in sorted(results.items()):
         entry = dict(entry)
         missing = {"statement", "value", "computed_by"} - set(entry)
-        unknown = set(entry) - {"statement", "value", "computed_by", "note", "simulated"}
+        unknown = set(entry) - {"statement", "value", "computed_by", "note", "simulated", "verdict"}
         if missing or unknown:
             raise ValueError(f"extension result {key!r}: needs 'statement', 'value' and 'computed_by' and may carry "
-                             f"'note' and 'simulated' (missing {sorted(missing)}, unknown {sorted(unknown)})")
+                             f"'note', 'simulated' and 'verdict' (missing {sorted(missing)}, unknown {sorted(unknown)})")
+        if entry.get("verdict", VERDICTS[0]) not in VERDICTS:
+            raise ValueError(f"extension result {key!r}: verdict {entry['verdict']!r} is not one of {list(VERDICTS)}")
         try:
             resolve_computed_by(entry["computed_by"])
         except ValueError as err:
             raise ValueError(f"notebook {notebook}, extension result {key!r}: {err}") from None
         entries[key] = {"statement": str(entry["statement"]), "value": _plain(entry["value"]),
                         "computed_by": str(entry["computed_by"]), "note": str(entry.get("note", "")),
-                        "simulated": bool(entry.get("simulated", True))}
+                        "simulated": bool(entry.get("simulated", True)), "verdict": str(entry.get("verdict", ""))}
     doc = {"notebook": notebook, "run": run_record(notebook), "extensions": entries}
     text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
     return saved(write_text(results_dir() / "extensions" / f"{notebook}.json", text))

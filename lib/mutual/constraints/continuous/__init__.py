@@ -14,8 +14,12 @@ chance thresholds and greedy inference:
   mapped to cells and actions (controls inferred where they were not recorded);
 * :mod:`.regions`, :mod:`.candidates`, :mod:`.thresholds` -- bounds, disks, boxes and cells as
   chance constraints with their maximum-likelihood thresholds (eq. 3.3, Lemma 3.2.1);
-* :mod:`.inference`, :mod:`.refine` -- the greedy inference in the constraints' units, and
-  refinement of the grid near an inferred boundary;
+* :mod:`.pointwise`, :mod:`.evidence`, :mod:`.search`, :mod:`.inference` -- the default: the exact
+  likelihood of continuous demonstrations of a deterministic system (Z on the grid, point by point),
+  candidates as continuous parameters (the tightest consistent bound, the largest consistent obstacle),
+  greedy inference with a stop rule on the exact gain and a likelihood interval per constraint;
+* :mod:`.cells`, :mod:`.refine` -- chapters 2-3's greedy inference on the discretized MDP itself
+  (``infer(..., model="cells")``), and refinement of its grid near an inferred boundary;
 * :mod:`.demonstrators` -- demonstrators on the TRUE continuous system (fine-grid soft-optimal, MPPI);
 * :mod:`.experiments`, :mod:`.soft_hjb`, :mod:`.plots` -- notebook 09's measurements and figures.
 """
@@ -25,19 +29,21 @@ from .candidates import RegionCandidates, bound_regions, box_regions, disk_regio
 from .demonstrators import mppi_rollouts, rollout, soft_demonstrator, starts_around
 from .discretization import discretize
 from .grid import Grid
+from .cells import CellInference, infer_cells
 from .inference import ContinuousInference, boundary_errors, infer
 from .mapping import check_recording, to_demonstrations
+from .pointwise import PointModel, point_model
 from .problem import Problem, QuadraticReward
 from .recordings import Recording, read_recording, write_recording
 from .regions import Bound, Box, Disk, boundary_distance, parse_region
 from .systemfile import check_start, load_system, system_from_mapping
 from .systems import SYSTEMS, System, integrate, named_system
 
-__all__ = ["SYSTEMS", "Bound", "Box", "ContinuousInference", "Disk", "Grid", "Problem", "QuadraticReward",
+__all__ = ["SYSTEMS", "Bound", "Box", "CellInference", "ContinuousInference", "Disk", "Grid", "PointModel", "Problem", "QuadraticReward",
            "Recording", "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors",
            "box_regions", "check_recording", "check_start", "convergence", "demos_sweep", "discretize",
-           "disk_regions", "inference_figure", "infer", "integrate", "load_system", "mppi_rollouts", "named_system",
-           "parse_region", "read_recording", "refinement", "region_candidates", "resolution_sweep", "rollout",
+           "disk_regions", "inference_figure", "infer", "infer_cells", "integrate", "load_system", "mppi_rollouts", "named_system",
+           "parse_region", "point_model", "read_recording", "refinement", "region_candidates", "resolution_sweep", "rollout",
            "soft_demonstrator", "starts_around", "summary", "system_from_mapping", "timed_inference",
            "to_demonstrations", "with_cells", "write_recording"]
 

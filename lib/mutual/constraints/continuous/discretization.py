@@ -134,6 +134,7 @@ def discretize(problem, scheduler="auto", workers=None, progress=False, allow_la
     an embedded private cluster of ``workers`` processes; :mod:`mutual.parallel`) or the address of a running
     Dask scheduler. The result does not depend on where it ran (the chunks and their seeds are fixed).
     ``allow_large``: as :func:`mutual.budget.check` (memory and time estimated before any integration).
+    ``progress``: a tqdm bar when True, or a function ``progress(done, total)`` called as chunks finish.
     """
     budget.check(budget.discretization(problem.grid.shape, problem.n_actions, problem.samples, problem.scheme,
                                        problem.substeps), allow_large)
@@ -152,5 +153,22 @@ def discretize(problem, scheduler="auto", workers=None, progress=False, allow_la
 
 
 def _progress(total, progress):
+    """A tqdm bar (``progress`` True), or a counter that calls ``progress(done, total)`` (a function)."""
+    if callable(progress):
+        return _Counter(total, progress)
     from tqdm.auto import tqdm
     return tqdm(total=total, desc="discretizing", disable=not progress)
+
+
+class _Counter:
+    """Counts finished chunks and reports ``(done, total)``."""
+
+    def __init__(self, total, report):
+        self.total, self.report, self.done = total, report, 0
+
+    def update(self, n):
+        self.done += n
+        self.report(self.done, self.total)
+
+    def close(self):
+        pass

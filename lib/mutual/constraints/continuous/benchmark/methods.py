@@ -30,12 +30,12 @@ def inference_answer(spec, recording):
     [candidates]) at every default: the accepted regions, their exact gains, how it stopped."""
     from .. import infer
     c = spec.candidates
+    sizes = (c["radii"] or []) + (c["half_widths"] or [])
     start = time.perf_counter()
-    run = infer(spec.problem, recording, families=c["families"], plane=c["plane"], every=c["every"],
-                radii=c["radii"], half_widths=c["half_widths"], scheduler="inline")
+    run = infer(spec.problem, recording, families=c["families"], plane=c["plane"], largest=max(sizes) if sizes else None)
     chosen = run.chosen()
-    gains = tuple(float(g) for g in chosen["exact_gain"]) if len(chosen) else ()
-    return Answer(tuple(run.chosen_regions()), gains, time.perf_counter() - start, f"stopped by {run.result.stop}")
+    gains = tuple(float(g) for g in chosen["gain_refit"]) if len(chosen) else ()
+    return Answer(tuple(run.chosen_regions()), gains, time.perf_counter() - start, f"stopped by {run.stop}")
 
 
 def cli_answer(spec_text, csv_path, names):
@@ -54,7 +54,7 @@ def cli_answer(spec_text, csv_path, names):
         raise RuntimeError(f"mutual constraints infer-continuous failed ({done.returncode}): {done.stderr.strip()}")
     out = json.loads(done.stdout)
     regions = tuple(region_of_record(r, names) for r in out["chosen"])
-    return Answer(regions, tuple(float(r["exact_gain"]) for r in out["chosen"]), seconds,
+    return Answer(regions, tuple(float(r["gain_refit"]) for r in out["chosen"]), seconds,
                   f"via the command line; stopped: {out['stopped']}")
 
 
