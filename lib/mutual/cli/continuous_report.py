@@ -7,7 +7,7 @@ from . import common
 
 def report_inference(args, run, traj_path, system_path):
     """Write the ranking, the accepted constraints and the figure as a set, and print the summary (or JSON)."""
-    from ..constraints.continuous.plots import inference_figure
+    from ..constraints.continuous import inference_figure
     common.use_agg()
     table, chosen = run.ranking(), run.chosen()
     with common.output_set(args) as files:
@@ -45,7 +45,7 @@ def code_note(file):
 def _weights(run):
     """The reward's weights of every round as {"q": [...], "c": [...], "Q": [...]} (a fixed temperature:
     the file's weights divided by it)."""
-    from ..constraints.continuous.pointwise import file_weights
+    from ..constraints.continuous import file_weights
     p = run.problem
     d, m = p.grid.ndim, p.controls.shape[1]
     out = []

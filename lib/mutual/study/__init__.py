@@ -27,7 +27,8 @@ _ON_FIRST_USE = {
     "Team": "teaming", "TeamingConfig": "teaming", "simulate_teaming": "teaming",
     # the thesis's statistics re-derived from its published numbers
     "design_from_f_dofs": "published", "f_p_value": "published", "recover_from_summary": "published",
-    "table_5_1_ratios": "published",
+    "table_5_1_ratios": "published", "arcs_against_clusters": "published",
+    "prediction_agreement": "published",
     # power of a replication: analytic, then simulated cohorts on Dask
     "contrast_sample_size": "power", "dz_from_summary": "power", "effect_size_from_f": "power",
     "gpower_table": "power", "noncentrality_interval": "power", "replication_plan": "power",
@@ -39,12 +40,13 @@ _ON_FIRST_USE = {
 }
 
 __all__ = ["CohortSetting", "CohortTask", "DegenerateDataError", "RMAnova", "Study", "TaskCache", "Team",
-           "TeamingConfig", "avoidance_onset", "code_version", "contrast_sample_size", "design_balance",
-           "design_from_f_dofs", "dz_from_summary", "effect_size_from_f", "f_p_value", "finish_power_axes",
-           "gpower_table", "implied_effect", "learned_set_cluster", "noncentrality_interval", "paired_t_holm",
-           "pairwise_comparisons", "plot_condition_means", "plot_simulated_power", "power_table",
-           "predicted_and_observed", "read_table", "recommendations", "recover_from_summary", "replication_plan",
-           "rm_anova", "run_tasks", "simulate_cohort", "simulate_study", "simulate_teaming", "study_design",
-           "study_value_functions", "table_5_1_ratios", "tukey_rm", "write_simulated_study", "write_table"]
+           "TeamingConfig", "arcs_against_clusters", "avoidance_onset", "code_version", "contrast_sample_size",
+           "design_balance", "design_from_f_dofs", "dz_from_summary", "effect_size_from_f", "f_p_value",
+           "finish_power_axes", "gpower_table", "implied_effect", "learned_set_cluster", "noncentrality_interval",
+           "paired_t_holm", "pairwise_comparisons", "plot_condition_means", "plot_simulated_power", "power_table",
+           "predicted_and_observed", "prediction_agreement", "read_table", "recommendations", "recover_from_summary",
+           "replication_plan", "rm_anova", "run_tasks", "simulate_cohort", "simulate_study", "simulate_teaming",
+           "study_design", "study_value_functions", "table_5_1_ratios", "tukey_rm", "write_simulated_study",
+           "write_table"]
 
 __getattr__ = lazy_names(__name__, _ON_FIRST_USE)

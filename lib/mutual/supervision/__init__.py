@@ -18,14 +18,16 @@ from .supervisor import (OPTIONAL_COLUMNS, REQUIRED_COLUMNS, NoisySupervisor, ap
                          collect_interventions, intervention_states, read_interventions, validate_interventions,
                          write_interventions)
 from .value_cache import CacheWarning
-from .value_function import FULL_GRID, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary, unsafe_set_contains
+from .value_function import (FULL_GRID, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary, boundary_values,
+                             unsafe_set_contains)
 
-__all__ = ["FULL_GRID", "OPTIONAL_COLUMNS", "QUICK_GRID", "REQUIRED_COLUMNS", "SPEED", "TRUE_W_MAX", "CacheWarning",
-           "GridSpec", "LibraryEdgeWarning", "NoisySupervisor", "SupervisorFit", "ValueFunction", "ValueLibrary",
-           "approach_scenes", "avoid_value_closed_form", "avoid_value_function", "binomial_consistent", "check_inside",
-           "check_states", "closed_form_agreement", "closed_form_dtheta", "closed_form_values", "collect_interventions",
-           "data_efficiency_scan", "dubins_arc", "dubins_step", "exact_library", "exact_value_function",
-           "expected_coverage", "false_positive_rates", "filter_control", "fit_supervisor", "intervention_states",
-           "keep_out_margin", "numerical_gaussian_fit", "read_interventions", "recovery_summary", "rotate_to_heading",
-           "safety_controller", "simulate_filtered", "unsafe_reach", "unsafe_set_contains", "validate_interventions",
-           "value_drift", "value_library", "wrap_angle", "write_interventions"]
+__all__ = ["CacheWarning", "FULL_GRID", "GridSpec", "LibraryEdgeWarning", "NoisySupervisor", "OPTIONAL_COLUMNS",
+           "QUICK_GRID", "REQUIRED_COLUMNS", "SPEED", "SupervisorFit", "TRUE_W_MAX", "ValueFunction", "ValueLibrary",
+           "approach_scenes", "avoid_value_closed_form", "avoid_value_function", "binomial_consistent",
+           "boundary_values", "check_inside", "check_states", "closed_form_agreement", "closed_form_dtheta",
+           "closed_form_values", "collect_interventions", "data_efficiency_scan", "dubins_arc", "dubins_step",
+           "exact_library", "exact_value_function", "expected_coverage", "false_positive_rates", "filter_control",
+           "fit_supervisor", "intervention_states", "keep_out_margin", "numerical_gaussian_fit", "read_interventions",
+           "recovery_summary", "rotate_to_heading", "safety_controller", "simulate_filtered", "unsafe_reach",
+           "unsafe_set_contains", "validate_interventions", "value_drift", "value_library", "wrap_angle",
+           "write_interventions"]

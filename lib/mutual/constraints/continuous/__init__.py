@@ -25,30 +25,31 @@ chance thresholds and greedy inference:
 """
 
 from ...lazy import lazy_names
-from .candidates import RegionCandidates, bound_regions, box_regions, disk_regions, region_candidates
+from .candidates import RegionCandidates, bound_regions, box_regions, disk_regions, region_candidates, threshold_table
 from .demonstrators import mppi_rollouts, rollout, soft_demonstrator, starts_around
 from .discretization import discretize
 from .grid import Grid
 from .cells import CellInference, infer_cells
 from .inference import ContinuousInference, boundary_errors, infer
 from .mapping import check_recording, to_demonstrations
-from .pointwise import PointModel, point_model
+from .pointwise import PointModel, file_weights, point_model
 from .problem import Problem, QuadraticReward
 from .recordings import Recording, read_recording, write_recording
 from .regions import Bound, Box, Disk, boundary_distance, parse_region
 from .systemfile import check_start, load_system, system_from_mapping
 from .systems import SYSTEMS, System, integrate, named_system
 
-__all__ = ["SYSTEMS", "Bound", "Box", "CellInference", "ContinuousInference", "Disk", "Grid", "PointModel", "Problem", "QuadraticReward",
-           "Recording", "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors",
-           "box_regions", "check_recording", "check_start", "convergence", "demos_sweep", "discretize",
-           "disk_regions", "inference_figure", "infer", "infer_cells", "integrate", "load_system", "mppi_rollouts", "named_system",
-           "parse_region", "point_model", "read_recording", "refinement", "region_candidates", "resolution_sweep", "rollout",
-           "soft_demonstrator", "starts_around", "summary", "system_from_mapping", "timed_inference",
-           "to_demonstrations", "with_cells", "write_recording"]
+__all__ = ["Bound", "Box", "CellInference", "ContinuousInference", "Disk", "Grid", "PointModel", "Problem",
+           "QuadraticReward", "Recording", "RegionCandidates", "SYSTEMS", "System", "bound_regions",
+           "boundary_distance", "boundary_errors", "box_regions", "check_recording", "check_start", "claim_verdict",
+           "convergence", "demos_sweep", "discretize", "disk_regions", "file_weights", "infer", "infer_cells",
+           "inference_figure", "integrate", "load_system", "mppi_rollouts", "named_system", "parse_region",
+           "point_model", "read_recording", "refinement", "region_candidates", "resolution_sweep", "rollout",
+           "soft_demonstrator", "starts_around", "summary", "system_from_mapping", "threshold_table",
+           "timed_inference", "to_demonstrations", "with_cells", "write_recording"]
 
 # notebook 09's measurements, the refinement, the soft HJB check and the figure, imported on first use
 __getattr__ = lazy_names(__name__, {
-    "with_cells": "experiments", "summary": "experiments", "resolution_sweep": "experiments",
+    "with_cells": "experiments", "claim_verdict": "experiments", "summary": "experiments", "resolution_sweep": "experiments",
     "demos_sweep": "experiments", "timed_inference": "experiments", "refinement": "refine",
     "convergence": "soft_hjb", "inference_figure": "plots"})

@@ -193,3 +193,25 @@ def families_regions(grid, families, plane=(0, 1), every=2, radii=None, half_wid
     if "box" in families:
         regions += box_regions(grid, plane, every, half_widths)
     return regions, "cell" in families
+
+
+def threshold_table(mdp, demos, grid, bounds):
+    """Where the cells model loses a bound (module docstring), one row per :class:`~.regions.Bound` of
+    ``bounds`` (one coordinate): psi* of eq. (3.3), whether the demonstrations stay feasible at it, the
+    lowest feasible psi (Lemma 3.2.1 taken exactly) and how many offered state-actions that threshold still
+    forbids (0: the candidate forbids nothing and is dropped)."""
+    dims = {b.dim for b in bounds}
+    if len(dims) != 1:
+        raise ValueError("bounds: need bounds on one coordinate")
+    SR = _bound_columns(mdp, grid, dims.pop(), list(bounds))
+    rows = th.demonstrated_rows(mdp, demos)
+    star = th.eq33(SR, rows)
+    bad = th.infeasible_at(mdp, demos, SR, star)
+    psi = star.copy()
+    if bad.any():
+        psi[bad] = th.lemma(mdp, demos, sp.csc_matrix(SR)[:, np.flatnonzero(bad)], star[bad])
+    offered = mdp.allowed.reshape(-1)
+    forbids = np.asarray((th.forbidden_by(SR, psi).multiply(sp.csr_matrix(offered.reshape(-1, 1)))).sum(axis=0)).ravel()
+    return pd.DataFrame({"bound": [b.describe(grid) for b in bounds], "value": [b.value for b in bounds],
+                         "psi eq. 3.3": star, "feasible at eq. 3.3": ~bad, "psi Lemma 3.2.1": psi,
+                         "state-actions forbidden": forbids.astype(int)})

@@ -27,14 +27,20 @@ _ON_FIRST_USE = {
     "correlation_scan": "predictability", "corollary_operation_counts": "timing", "replan_against_dragan": "timing",
     "lbfgs_likelihood_ratio_minimiser": "verify", "lemma_641_exhaustive": "verify",
     "suboptimality_multiplier": "verify",
+    "bounded_legible_qp": "verify", "multi_distractor_kkt": "verify",
+    # the observer of chapters 6-7 checked exactly on problems small enough to enumerate
+    "most_powerful_check": "observer_checks", "order_preserving_check": "observer_checks",
+    "posterior_partition_effect": "observer_checks", "prior_sensitivity": "observer_checks",
 }
 
-__all__ = ["LQSolution", "LinearDynamics", "QuadraticCost", "corollary_operation_counts", "correlation_scan",
-           "distractor_mixture", "double_integrator", "figure_62_scan", "figure_63_verdicts",
+__all__ = ["LQSolution", "LinearDynamics", "QuadraticCost", "bounded_legible_qp", "corollary_operation_counts",
+           "correlation_scan", "distractor_mixture", "double_integrator", "figure_62_scan", "figure_63_verdicts",
            "geometric_alpha_schedule", "gradient_linear_structure", "inverse_square_alpha_schedule",
            "lbfgs_likelihood_ratio_minimiser", "legible_cost", "legible_trajectory", "lemma_641_exhaustive",
-           "linear_alpha_schedule", "multi_distractor_qp", "random_lq_hypotheses", "reaching_cost",
-           "receding_equivalence", "receding_horizon", "receding_horizon_qp", "replan_against_dragan", "replan_gains",
-           "single_integrator", "solve", "solve_lq", "suboptimality_multiplier", "time_to_reach"]
+           "linear_alpha_schedule", "most_powerful_check", "multi_distractor_kkt", "multi_distractor_qp",
+           "order_preserving_check", "posterior_partition_effect", "prior_sensitivity", "random_lq_hypotheses",
+           "reaching_cost", "receding_equivalence", "receding_horizon", "receding_horizon_qp",
+           "replan_against_dragan", "replan_gains", "single_integrator", "solve", "solve_lq",
+           "suboptimality_multiplier", "time_to_reach"]
 
 __getattr__ = lazy_names(__name__, _ON_FIRST_USE)
