@@ -32,6 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..riccati import LQStage, riccati_step
+
 
 @dataclass(frozen=True)
 class LQSolution:
@@ -120,33 +122,20 @@ def riccati_backward(A, B, Q, R, q, r, QN, qN, M=None, c=None, starts=None):
         raise ValueError(f"starts must be {P} non-decreasing stage indices in [0, {N}), got {starts!r}")
     M = np.zeros((P, N, n, m)) if M is None else M
     c = np.zeros((N, n)) if c is None else c
-    AT, BT = A.transpose(0, 2, 1), B.transpose(0, 2, 1)
-    MT = M.transpose(0, 1, 3, 2)
+    S = M.transpose(0, 1, 3, 2)                                      # u'S x = x'M u
     active = np.searchsorted(starts, np.arange(N), side="right")   # problems already started at stage k
     K, kff = np.zeros((P, N, m, n)), np.zeros((P, N, m))
     V, v = np.zeros((P, N + 1, n, n)), np.zeros((P, N + 1, n))
     Quu = np.tile(np.eye(m), (P, N, 1, 1))
     V[:, N] = 0.5 * (QN + QN.transpose(0, 2, 1))
     v[:, N] = qN
-    for t in range(N - 1, -1, -1):
-        a = active[t]
-        Vn, vn = V[:a, t + 1], v[:a, t + 1, :, None]
-        VA, VB = Vn @ A[t], Vn @ B[t]
-        vc = vn + Vn @ c[t, :, None]
-        Quu[:a, t] = R[:a, t] + BT[t] @ VB
-        Qux = MT[:a, t] + BT[t] @ VA
-        try:
-            inv = np.linalg.inv(Quu[:a, t])
-        except np.linalg.LinAlgError:
-            raise ValueError(f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} is singular; "
-                             + _UNBOUNDED) from None
-        Kt = K[:a, t] = -inv @ Qux
-        kt = -inv @ (r[:a, t, :, None] + BT[t] @ vc)
-        kff[:a, t] = kt[..., 0]
-        QxuT = Qux.transpose(0, 2, 1)
-        Vt = Q[:a, t] + AT[t] @ VA + QxuT @ Kt
-        V[:a, t] = 0.5 * (Vt + Vt.transpose(0, 2, 1))
-        v[:a, t] = (q[:a, t, :, None] + AT[t] @ vc + QxuT @ kt)[..., 0]
+    with np.errstate(invalid="ignore", over="ignore"):   # an unbounded problem's NaN: reported below
+        for t in range(N - 1, -1, -1):
+            a = active[t]
+            stage = LQStage(A=A[t], B=B[t], Q=Q[:a, t], R=R[:a, t], S=S[:a, t], q=q[:a, t], r=r[:a, t], c=c[t])
+            step = riccati_step(V[:a, t + 1], v[:a, t + 1], stage)
+            Quu[:a, t], K[:a, t], kff[:a, t] = step.Q_uu, step.K, step.k
+            V[:a, t], v[:a, t] = step.V, step.v
     _check_convex(Quu, R, B, V, started=np.arange(N) >= starts[:, None])
     return K, kff, V, v
 
