@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .riccati import LQStage, riccati_step
+from .riccati import LQStage, positive_definite, riccati_step
 
 DENSE_LIMIT_BYTES = 2 * 2 ** 30        # the dense forms (checks on small problems) refuse above this
 _HALF_LOG_2PI = 0.5 * np.log(2 * np.pi)
@@ -262,17 +262,19 @@ def riccati_factor(A, B, Hz, gz, VN, vN, what="the cost"):
     P, N = Hz.shape[:2]
     n, m = B.shape[-2:]
     K, k, L = np.empty((P, N, m, n)), np.empty((P, N, m)), np.empty((P, N, m, m))
+    Quu = np.empty((P, N, m, m))
     V, v = np.array(VN, float), np.array(vN, float)
+    F = np.concatenate([A, B], axis=2)
     with np.errstate(over="ignore", invalid="ignore"):
         for t in range(N - 1, -1, -1):
-            H, g = Hz[:, t], gz[:, t]
-            stage = LQStage(A=A[t], B=B[t], Q=H[:, :n, :n], R=H[:, n:, n:], S=H[:, n:, :n], q=g[:, :n], r=g[:, n:])
-            step = riccati_step(V, v, stage)
-            if not np.all(step.pivots > 0) and np.all(np.isfinite(step.Q_uu)):
-                raise ValueError(f"{what}: its control Hessian Q_uu = R + B'VB at stage {t} is not positive "
-                                 "definite")
-            K[:, t], k[:, t], L[:, t] = step.K, step.k, step.L
+            step = riccati_step(V, v, LQStage(F=F[t], H=Hz[:, t], g=gz[:, t]))
+            K[:, t], k[:, t], L[:, t], Quu[:, t] = step.K, step.k, step.L, step.Q_uu
             V, v = step.V, step.v
+    # the first stage (from the end) whose finite Q_uu has no Cholesky factor; the stages before it are NaN
+    refused = ~positive_definite(L) & np.isfinite(Quu).all(axis=(-2, -1))
+    if refused.any():
+        raise ValueError(f"{what}: its control Hessian Q_uu = R + B'VB at stage {np.nonzero(refused)[1].max()} is "
+                         "not positive definite")
     if not (np.all(np.isfinite(K)) and np.all(np.isfinite(k)) and np.all(np.isfinite(L))):
         raise NotRepresentable(f"{what}: the Riccati backward pass overflowed float64; rescale the problem "
                                "(its positions, weights or time step)")

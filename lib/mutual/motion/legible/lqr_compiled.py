@@ -52,13 +52,15 @@ def _solve(arrays, QN, qN, x0, pad, per_stage):
     def back(carry, s):
         V, v = carry
         p = stage(s)
-        step = riccati_step(V, v, LQStage(A=p["A"], B=p["B"], Q=p["Q"], R=p["R"], S=p["M"].T, q=p["q"], r=p["r"],
-                                          c=p["c"]), jnp)
+        F = jnp.concatenate([p["A"], p["B"]], axis=1)
+        H = jnp.block([[p["Q"], p["M"]], [p["M"].T, p["R"]]])
+        step = riccati_step(V, v, LQStage(F=F, H=H, g=jnp.concatenate([p["q"], p["r"]]), c=p["c"]), jnp)
         BVB = mm(jnp, p["B"].T, mm(jnp, V, p["B"]))
         scale = jnp.abs(p["R"]).max() + jnp.abs(BVB).max()
         active = s["t"] >= pad
         V_out, v_out = jnp.where(active, step.V, V), jnp.where(active, step.v, v)
-        return (V_out, v_out), (step.K, step.k, V_out, v_out, jnp.nanmin(step.pivots), scale)
+        root = jnp.min(jnp.diagonal(step.L))                 # the smallest pivot's root; NaN for a negative pivot
+        return (V_out, v_out), (step.K, step.k, V_out, v_out, root * root, scale)
 
     xs_back = {**varying, "t": t_all}
     _, (K, k, V, v, pivots, scales) = jax.lax.scan(back, (QN, qN), xs_back, reverse=True)

@@ -13,7 +13,7 @@ model's predicted decrease ``-(a d1 + a^2 d2)`` for a step of size ``a`` (eq. (1
 import jax
 import jax.numpy as jnp
 
-from ..riccati import LQStage, mv, riccati_step
+from ..riccati import LQStage, mv, positive_definite, riccati_step
 
 BACKWARD_UNROLL = 4  # stages per iteration of the backward scan (fewer loop trips; measured on a CPU)
 
@@ -22,15 +22,14 @@ def _stage(carry, stage, reg, n, curvature_weight):
     """One stage of the recursion: ``(V, v)`` at ``k + 1`` to ``(V, v)`` at ``k`` and the gains ``[k K]``."""
     V, v, d1, d2, every_ok = carry
     F, g, H = stage[:3]
-    lq = LQStage(A=F[:, :n], B=F[:, n:], Q=H[:n, :n], R=H[n:, n:], S=H[n:, :n], q=g[:n], r=g[n:])
     curvature = None
     if len(stage) > 3:  # DDP: + sum_i v_i f_i''
         curvature = curvature_weight * jnp.sum(v[:, None, None] * stage[3], axis=0)
-    step = riccati_step(V, v, lq, jnp, reg=reg, curvature=curvature)
+    step = riccati_step(V, v, LQStage(F=F, H=H, g=g), jnp, reg=reg, curvature=curvature)
     k = step.k
     d1 = d1 + jnp.sum(k * step.Q_u)
     d2 = d2 + 0.5 * jnp.sum(k * mv(jnp, step.Q_uu, k))
-    return (step.V, step.v, d1, d2, every_ok & jnp.all(step.pivots > 0)), step.gains
+    return (step.V, step.v, d1, d2, every_ok & positive_definite(step.L)), step.gains
 
 
 def backward_pass(model, mu, curvature_weight=1.0):
