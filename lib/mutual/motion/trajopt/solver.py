@@ -72,6 +72,11 @@ class ILQRResult:
                 f"m={m}, relative decrease={self.decrease:.1e})")
 
 
+def _host(arrays):
+    """The solve's outputs as NumPy arrays (``np.asarray`` each: a third of ``jax.device_get``'s cost here)."""
+    return tuple(np.asarray(a) for a in arrays)
+
+
 def _settings(settings, changes, default):
     """``settings`` (None: ``default``) with the keyword ``changes`` applied."""
     if settings is None:
@@ -79,7 +84,7 @@ def _settings(settings, changes, default):
     elif not isinstance(settings, ILQRSettings):
         raise ValueError(f"settings must be an ILQRSettings (mutual.motion.trajopt.ILQRSettings), got "
                          f"{type(settings).__name__}")
-    return settings.replace(**changes)
+    return settings.replace(**changes) if changes else settings
 
 
 class _SaddleError(ILQRError):
@@ -200,7 +205,7 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, settings=N
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
     solve = kernels(dynamics, running_cost, terminal_cost).solve
     for _ in range(SADDLE_ESCAPES + 1):
-        out = jax.device_get(solve(x0, us, params, settings.tolerances, settings.second_order, settings.max_iter))
+        out = _host(solve(x0, us, params, settings.tolerances, settings.second_order, settings.max_iter))
         outcome = _outcome(*out, settings)
         if not isinstance(outcome, _SaddleError):
             break
