@@ -2,12 +2,14 @@
 
 Rows:
 1. The cart-pole of ``data/examples/cartpole.toml`` (20^4 = 160,000 cells x 5 forces, T = 40,
-   barycentric) from 20 MPPI demonstrations: discretize, map, build the candidates (bounds, Lemma 3.2.1
-   thresholds) and run greedy inference to the stop rule, in a fresh process; a second run in the
-   same process gives the compile time. Target: under 60 s on 2 cores, compile included. The row
-   gives the wall and CPU seconds (all threads) of the cold run, the load average when it started
-   (the machine may be shared) and the peak resident memory of that process. Also 10^4 and 14^4
-   (time and memory per resolution).
+   barycentric) from 20 MPPI demonstrations, the cells model (``infer(..., model="cells")``):
+   discretize, map, build the candidates (bounds, Lemma 3.2.1 thresholds) and run greedy inference to
+   the stop rule, in a fresh process; a second run in the same process gives the compile time.
+   Target: under 60 s on 2 cores, compile included. The row gives the wall and CPU seconds (all
+   threads) of the cold run, the load average when it started (the machine may be shared) and the
+   peak resident memory of that process. Also 10^4 and 14^4 (time and memory per resolution), and
+   the points model (the default: the temperature fitted, tightest bounds, stop rule, intervals) at
+   10^4 and 14^4 (no target: its backups run in numpy, once per temperature tried).
 2. Round 1 of the 12^4 problem scored by the compiled gather backup on the states the
    demonstrations' starts reach (``engine="gather"``, :mod:`mutual.constraints.reachable`) against
    the numpy sparse backup of chapter 2 on the whole MDP (``engine="numpy", reachable=False``: a
@@ -51,24 +53,24 @@ def _setting(cells, demos=20):
     return problem, recording, sim["hidden"]
 
 
-def cartpole_run(cells):
-    """The whole pipeline at ``cells`` per coordinate: a dict of stage seconds and the outcome."""
+def cartpole_run(cells, model="cells"):
+    """The whole pipeline at ``cells`` per coordinate with ``model``: a dict of stage seconds and the outcome."""
     from mutual.constraints.continuous import boundary_errors, infer
     problem, recording, hidden = _setting(cells)
     load, cpu, start = os.getloadavg()[0], time.process_time(), time.perf_counter()
-    run = infer(problem, recording, rounds=4, min_gain=0.1, scheduler="inline")
+    options = dict(min_gain=0.1, scheduler="inline") if model == "cells" else {}
+    run = infer(problem, recording, rounds=4, model=model, **options)
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
-    return dict(cells=cells, seconds=seconds, cpu=cpu, load=load, stages=run.seconds, candidates=len(run.candidates),
-                rounds=len(run.result.chosen), stop=run.result.stop, engine_rows=run.mdp.n_states * run.mdp.n_actions,
-                chosen=[run.candidates.label(k) for k in run.result.chosen],
-                error=boundary_errors(run, hidden)[0], added=run.mapped.added, steps=run.mapped.snapped,
+    scored = len(run.candidates) if model == "cells" else sum(len(t) for t in run.rounds)
+    return dict(cells=cells, model=model, seconds=seconds, cpu=cpu, load=load, stages=run.seconds, candidates=scored,
+                rounds=len(run.chosen_regions()), stop=run.stop, chosen=run.labels(), error=boundary_errors(run, hidden)[0],
                 peak_rss_gib=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20)
 
 
-def _child(cells, warm=True):
-    """``cartpole_run(cells)`` in a fresh process, twice with ``warm`` (the second without compiling)."""
+def _child(cells, warm=True, model="cells"):
+    """``cartpole_run(cells, model)`` in a fresh process, twice with ``warm`` (the second without compiling)."""
     code = ("import json, sys; sys.path.insert(0, 'bench'); import mutual; from bench_continuous import cartpole_run; "
-            f"runs = [cartpole_run({cells}) for _ in range({2 if warm else 1})]; "
+            f"runs = [cartpole_run({cells}, {model!r}) for _ in range({2 if warm else 1})]; "
             "runs[-1]['cold'] = runs[0]['seconds']; runs[-1]['cold_stages'] = runs[0]['stages']; "
             "runs[-1]['cold_cpu'] = runs[0]['cpu']; runs[-1]['cold_load'] = runs[0]['load']; print(json.dumps(runs[-1]))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
@@ -79,13 +81,16 @@ def _child(cells, warm=True):
 
 def pipeline_rows(quick):
     rows = []
-    for cells in ([8] if quick else [10, 14, 20]):
-        r = _child(cells, warm=(cells == (8 if quick else 20)))
+    runs = [(c, "cells") for c in ([8] if quick else [10, 14, 20])] + [(c, "points") for c in ([6] if quick else [10, 14])]
+    for cells, model in runs:
+        r = _child(cells, warm=(model == "cells" and cells == (8 if quick else 20)), model=model)
         stages = ", ".join(f"{k} {v:.1f} s" for k, v in r["cold_stages"].items())
-        target = f"< {TARGET_SECONDS:.0f} s on 2 cores (compile included)" if cells == 20 else ""
+        target = f"< {TARGET_SECONDS:.0f} s on 2 cores (compile included)" if cells == 20 and model == "cells" else ""
+        what = ("discretize + candidates ({n} bounds, Lemma 3.2.1) + greedy to the stop rule" if model == "cells" else
+                "point model + fitted temperature + {n} candidates scored + greedy to the stop rule, intervals")
         rows.append(_row(f"cart-pole {cells}^4 = {cells ** 4:,} cells x 5 forces, T = 40, barycentric, 20 MPPI "
-                         f"demonstrations: discretize + candidates ({r['candidates']} bounds, Lemma 3.2.1) + greedy to the "
-                         f"stop rule ({r['rounds']} rounds, {r['stop']}); cold: {stages}; cold CPU {r['cold_cpu']:.1f} s "
+                         f"demonstrations, {model} model: {what.format(n=r['candidates'])} ({r['rounds']} rounds, "
+                         f"{r['stop']}); cold: {stages}; cold CPU {r['cold_cpu']:.1f} s "
                          f"(all threads), load average {r['cold_load']:.1f} at its start",
                          r["seconds"], target=target, met=(r["cold"] < TARGET_SECONDS) if target else None,
                          compile_seconds=r["compile_seconds"],
@@ -145,7 +150,7 @@ def dask_rows(quick):
 
 
 def run(quick=False):
-    """The rows above; quick: 8^4 and 7^4, and no Dask row (a LocalCluster takes longer to start than the
+    """The rows above; quick: 8^4 (points: 6^4) and 7^4, and no Dask row (a LocalCluster takes longer to start than the
     quick sizes take to compute)."""
     os.environ.setdefault("TQDM_DISABLE", "1")
     return pipeline_rows(quick) + engine_rows(quick) + ([] if quick else dask_rows(quick))
@@ -153,7 +158,7 @@ def run(quick=False):
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["cartpole"]:
-        print(json.dumps(cartpole_run(int(sys.argv[2]))))
+        print(json.dumps(cartpole_run(int(sys.argv[2]), *sys.argv[3:4])))
     else:
         for row in run(quick="--quick" in sys.argv):
             print(row)

@@ -34,7 +34,7 @@ def _env(**extra):
 def test_a_second_process_loads_what_the_first_compiled(tmp_path):
     env = _env(MUTUAL_CACHE_DIR=str(tmp_path))
     first, cold_hits, folder = _run(env)
-    assert folder == str(tmp_path / "jax") and any((tmp_path / "jax").iterdir())
+    assert folder == str(tmp_path / jax_cache.FOLDER) and any((tmp_path / jax_cache.FOLDER).iterdir())
     second, warm_hits, _ = _run(env)
     assert cold_hits == 0 and warm_hits >= 1 and second == first
 
@@ -60,5 +60,65 @@ def test_a_file_where_the_folder_should_be_leaves_the_cache_off(tmp_path, monkey
     monkeypatch.setenv("MUTUAL_CACHE_DIR", str(tmp_path / "cache"))
     env = {}
     with pytest.warns(RuntimeWarning, match="not writable"):
+        jax_cache.use_persistent_cache(env)
+    assert env == {}
+
+
+# two programs of one shape: swapping their cache entries made a fresh process compute v + 0.5 for v - 0.5
+SWAPPED = """
+import jax, jax.numpy as jnp, mutual
+f = jax.jit(lambda v: v - 0.5)
+g = jax.jit(lambda v: v + 0.5)
+print(float(f(jnp.float32(2.0))), float(g(jnp.float32(2.0))))
+"""
+
+
+def _programs(env):
+    out = subprocess.run([sys.executable, "-c", SWAPPED], capture_output=True, text=True, env=env, check=True)
+    return tuple(float(v) for v in out.stdout.split()), out.stderr
+
+
+def _lambdas(folder):
+    return sorted(p for p in (folder / jax_cache.FOLDER).iterdir() if p.name.startswith("jit__lambda"))
+
+
+def _swap(a, b):
+    data = a.read_bytes()
+    a.write_bytes(b.read_bytes())
+    b.write_bytes(data)
+
+
+@pytest.mark.parametrize("how", ["entries swapped", "an entry without its authentication code"])
+def test_a_replaced_compiled_program_is_never_run(tmp_path, how):
+    env = _env(MUTUAL_CACHE_DIR=str(tmp_path))
+    assert _programs(env)[0] == (1.5, 2.5)
+    first, second = _lambdas(tmp_path)
+    if how == "entries swapped":
+        _swap(first, second)
+    else:                                   # JAX's own format, as anyone without the key could write it
+        first.write_bytes(second.read_bytes()[32:])
+    values, err = _programs(env)
+    assert values == (1.5, 2.5) and "does not verify" in err and "not run" in err
+    values, err = _programs(env)            # healed: compiled anew and stored with its code
+    assert values == (1.5, 2.5) and "does not verify" not in err
+
+
+def test_a_cache_folder_others_may_write_is_not_used(tmp_path, monkeypatch):
+    shared = tmp_path / "shared"
+    (shared / jax_cache.FOLDER).mkdir(parents=True)
+    shared.chmod(0o777)
+    monkeypatch.setenv("MUTUAL_CACHE_DIR", str(shared))
+    env = {}
+    with pytest.warns(RuntimeWarning, match=f"{shared} can be written by anyone .*rm -rf {shared}"):
+        jax_cache.use_persistent_cache(env)
+    assert env == {}
+
+
+def test_a_jax_cache_folder_of_ones_own_that_others_may_write_is_refused(tmp_path):
+    own = tmp_path / "own"
+    own.mkdir()
+    own.chmod(0o777)
+    env = {"JAX_COMPILATION_CACHE_DIR": str(own)}
+    with pytest.warns(RuntimeWarning, match="can be written by anyone.*JAX's compilation cache is off"):
         jax_cache.use_persistent_cache(env)
     assert env == {}

@@ -1,7 +1,10 @@
-"""The package's architecture (issue 11): the thrusts apart, the machinery never imported by the
-algorithms, no import circles, no module too long to hold in mind."""
+"""The package's architecture, read from the source (AST) without importing it: the thrusts apart, each
+reached by the others, the command line and the report only through its face (the names its package lists in
+``__all__``), the machinery never imported by the algorithms, no import circles, no module too long to hold
+in mind."""
 
 import ast
+import json
 from pathlib import Path
 
 import pytest
@@ -9,8 +12,13 @@ import pytest
 import mutual
 
 PACKAGE = Path(mutual.__file__).parent
+ROOT = PACKAGE.parents[1]
 MODULES = sorted(PACKAGE.rglob("*.py"))
 ALGORITHMS = ("constraints", "supervision", "study", "motion", "cycle")
+#: packages reached from outside only through their face: the thrusts (continuous/ is constraints' extension)
+#: and the readers of users' files
+FACES = ("mutual.constraints", "mutual.constraints.continuous", "mutual.supervision", "mutual.study", "mutual.motion",
+         "mutual.cycle", "mutual.inputs")
 MAX_LINES = 420
 
 
@@ -19,20 +27,26 @@ def _name(path):
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _imports(path):
-    """Every mutual module that ``path`` imports, anywhere in its body (absolute or relative)."""
+def _imported(path):
+    """``(module, name, line)`` for every import of a mutual module in ``path`` (anywhere in its body, absolute
+    or relative); ``name`` is None for ``import mutual.x``."""
     here = _name(path).split(".")
     package = here if path.name == "__init__.py" else here[:-1]
-    found = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
-            found |= {a.name for a in node.names if a.name.startswith("mutual")}
+            yield from ((a.name, None, node.lineno) for a in node.names if a.name.startswith("mutual"))
         elif isinstance(node, ast.ImportFrom):
             base = package[:len(package) - node.level + 1] if node.level else []
             module = ".".join(base + ([node.module] if node.module else []))
             if module.startswith("mutual"):
-                found.add(module)
-                found |= {f"{module}.{a.name}" for a in node.names}
+                yield from ((module, a.name, node.lineno) for a in node.names)
+
+
+def _imports(path):
+    """Every mutual module that ``path`` imports."""
+    found = set()
+    for module, name, _ in _imported(path):
+        found |= {module} | ({f"{module}.{name}"} if name else set())
     known = {_name(p) for p in MODULES}
     return {m for m in found if m in known} - {_name(path)}
 
@@ -40,14 +54,99 @@ def _imports(path):
 GRAPH = {_name(p): _imports(p) for p in MODULES}
 
 
+def _face(package):
+    """``{name: module}`` of a package's face: what ``__all__`` lists, with the submodule each name comes from
+    (imported at the top or named in the ``lazy_names`` table read on first use)."""
+    tree = ast.parse((PACKAGE.parent.joinpath(*package.split(".")) / "__init__.py").read_text())
+    listed, source = [], {}
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "__all__" for t in node.targets):
+            listed = [e.value for e in node.value.elts]
+        elif isinstance(node, ast.ImportFrom) and node.level == 1 and node.module:
+            source |= {a.asname or a.name: node.module for a in node.names}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Dict) and node.keys and all(isinstance(k, ast.Constant) for k in node.keys):
+            source |= {k.value: v.value for k, v in zip(node.keys, node.values) if isinstance(v, ast.Constant)}
+    return {name: source.get(name) for name in listed}
+
+
+FACE = {face: _face(face) for face in FACES}
+
+
+def _face_of(module):
+    return "mutual.constraints.continuous" if module.startswith("mutual.constraints.continuous") else \
+        ".".join(module.split(".")[:2])
+
+
 def test_the_thrusts_and_the_machinery_are_subpackages():
     packages = sorted(p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists())
-    assert packages == sorted(ALGORITHMS + ("compendium", "cli"))
+    assert packages == sorted(ALGORITHMS + ("compendium", "cli", "inputs"))
 
 
 @pytest.mark.parametrize("name", [n for n in GRAPH if n.split(".")[1:2] and n.split(".")[1] in ALGORITHMS])
 def test_algorithms_never_import_the_machinery(name):
     assert not [m for m in GRAPH[name] if m.startswith("mutual.compendium")], f"{name} imports the compendium"
+
+
+@pytest.mark.parametrize("path", [p for p in MODULES if _name(p) != "mutual"], ids=_name)
+def test_other_thrusts_are_reached_only_through_their_face(path):
+    """A module of one thrust (or of cli/, compendium/, a top-level module) imports from another thrust, or from
+    inputs/, only names its face lists in ``__all__``: ``from mutual.supervision import fit_supervisor``, never a
+    submodule or a private helper."""
+    here = _name(path).split(".")[1]
+    wrong = []
+    for module, name, line in _imported(path):
+        there = module.split(".")[1] if module.count(".") else None
+        if there not in ALGORITHMS + ("inputs",) or there == here:
+            continue
+        face = _face_of(module)
+        if module != face or name is None:
+            wrong.append(f"line {line}: {module}{'.' + name if name else ''} is not the face {face}")
+        elif name not in FACE[face]:
+            wrong.append(f"line {line}: {name} is not in {face}.__all__")
+    assert not wrong, f"{_name(path)}: " + "; ".join(wrong)
+
+
+@pytest.mark.parametrize("face", FACES)
+def test_a_face_names_where_each_name_comes_from(face):
+    """Every name of ``__all__`` is imported at the top of the package or read on first use from a named module."""
+    assert FACE[face] and not [n for n, module in FACE[face].items() if module is None], FACE[face]
+
+
+def _computed_by():
+    """The ``computed_by`` strings of the report: the notebooks' results entries (``"computed_by": "mutual...."``)
+    and data/paper_claims.csv's column of that name, if it has one."""
+    found = set()
+    for notebook in sorted((ROOT / "notebooks").glob("*.ipynb")):
+        for cell in json.loads(notebook.read_text())["cells"]:
+            if cell["cell_type"] != "code":
+                continue
+            for node in ast.walk(ast.parse("".join(cell["source"]))):
+                if isinstance(node, ast.Dict):
+                    found |= {v.value for k, v in zip(node.keys, node.values) if isinstance(k, ast.Constant)
+                              and k.value == "computed_by" and isinstance(v, ast.Constant)}
+    claims = ROOT / "data" / "paper_claims.csv"
+    if claims.exists():
+        import csv
+        with claims.open(newline="") as f:
+            found |= {row["computed_by"] for row in csv.DictReader(f) if row.get("computed_by")}
+    return sorted(found)
+
+
+def test_the_report_names_computations():
+    assert len(_computed_by()) > 50
+
+
+@pytest.mark.parametrize("dotted", _computed_by())
+def test_the_reports_computations_are_public_names(dotted):
+    """``mutual.<package>.<module>.<name>`` with ``name`` in the face of a package on that path (the thrust's,
+    or one of its subpackages'), coming from that module: a reader finds each computation in the public API."""
+    parts = dotted.split(".")
+    module, name = ".".join(parts[:-1]), parts[-1]
+    faces = [".".join(parts[:i]) for i in range(2, len(parts))
+             if (PACKAGE.parent.joinpath(*parts[:i]) / "__init__.py").exists()]
+    assert any(name in _face(face) and module in (face, f"{face}.{_face(face)[name]}") for face in faces), \
+        f"{dotted}: add {name} to the __all__ of {' or '.join(faces)}"
 
 
 def test_no_import_circles():
@@ -79,7 +178,7 @@ def test_modules_stay_short(path):
     assert lines <= MAX_LINES, f"{_name(path)} has {lines} lines: split it by idea"
 
 
-@pytest.mark.parametrize("package", ALGORITHMS)
+@pytest.mark.parametrize("package", ALGORITHMS + ("constraints.continuous",))
 def test_each_subpackage_states_its_public_api(package):
     module = __import__(f"mutual.{package}", fromlist=["__all__"])
     assert module.__all__ and all(hasattr(module, n) for n in module.__all__)

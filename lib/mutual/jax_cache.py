@@ -3,7 +3,7 @@
 JAX compiles every jitted function once per process; the compendium's solvers (iLQR, L-BFGS, the
 Riccati recursions, the Algorithm 4 stencil, the HJ solver) take 0.2-5 s each to compile, and the
 tests, the notebooks, ``make figures`` and the command line compile the same programs again and
-again. Importing :mod:`mutual` points JAX's persistent cache at ``<cache folder>/jax``
+again. Importing :mod:`mutual` points JAX's persistent cache at ``<cache folder>/jax-signed``
 (:func:`mutual.cache.cache_dir`: ``$MUTUAL_CACHE_DIR``, or ``~/.cache/mutual``), so a program
 compiled once is loaded from disk by every later process. Entries are keyed by JAX's own rules
 (the program, the JAX and XLA versions, the backend and its flags), so a change of any of them
@@ -13,14 +13,32 @@ Nothing is imported and no folder is created here: the settings go into the envi
 (``JAX_COMPILATION_CACHE_DIR``, read by JAX when it is imported), or into ``jax.config`` when JAX
 was imported before :mod:`mutual`. A cache folder of your own (``JAX_COMPILATION_CACHE_DIR``)
 wins, and an unwritable cache folder leaves the cache off (a warning once), never stops a run.
+
+JAX runs what it loads from its cache as machine code, and its own cache has no authentication (JAX's
+documentation: sharing the cache is letting anyone who may write it run code as you). So, as for every
+cache of :mod:`mutual.cache`: a cache folder that others may write, or that is not yours, is not used
+(:func:`mutual.cache.insecure`; your own ``JAX_COMPILATION_CACHE_DIR`` too), and each entry in
+``<cache folder>/jax-signed`` carries an HMAC-SHA256 of its key and content under your secret key
+(:func:`authenticate_entries`): an executable replaced, swapped with another entry or planted without
+the key does not verify, is deleted, and is compiled anew (a warning says so), instead of running as is or
+failing with an XLA layout error. This wraps JAX's file cache through its internal
+``jax._src.compilation_cache.get_file_cache``, hooked when JAX is imported; with a JAX where that is gone,
+the cache stays off (a warning), never unauthenticated.
 """
 
+import hashlib
+import hmac
+import importlib.abc
+import importlib.util
 import os
 import sys
+import warnings
 from pathlib import Path
 
-from .cache import cache_dir, unusable
+from .atomic import atomic_path
+from .cache import CacheWarning, advice, cache_dir, insecure, secret_key, unusable
 
+FOLDER = "jax-signed"       # entries with their HMAC (the unsigned ones of "jax" are never read)
 MIN_COMPILE_SECONDS = 0.0  # every compiled program (JAX's default, 1 s, would leave out most iLQR kernels)
 SETTINGS = {"jax_compilation_cache_dir": "JAX_COMPILATION_CACHE_DIR",
             "jax_persistent_cache_min_compile_time_secs": "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"}
@@ -36,11 +54,21 @@ def _writable(folder):
 
 
 def use_persistent_cache(environ=os.environ):
-    """Turn JAX's persistent compilation cache on in ``<cache folder>/jax`` (see the module)."""
-    if environ.get("JAX_COMPILATION_CACHE_DIR"):
+    """Turn JAX's persistent compilation cache on in ``<cache folder>/jax-signed``, with authenticated entries (see
+    the module); refuse a folder, ours or yours, that others may write."""
+    own = environ.get("JAX_COMPILATION_CACHE_DIR")
+    if own:
+        reason = insecure(own)
+        if reason:
+            unusable(own, reason, f"JAX's compilation cache is off; make {own} yours alone (chmod -R go-w {own}) "
+                                  f"or unset JAX_COMPILATION_CACHE_DIR; clearing it is safe: rm -rf {own}")
+            environ.pop("JAX_COMPILATION_CACHE_DIR")
+            if "jax" in sys.modules:
+                import jax
+                jax.config.update("jax_compilation_cache_dir", None)
         return
     try:
-        folder = cache_dir() / "jax"
+        folder = cache_dir() / FOLDER
     except OSError as err:
         unusable("the cache folder", err, "JAX's compilation cache is off")
         return
@@ -48,6 +76,11 @@ def use_persistent_cache(environ=os.environ):
         unusable(folder, f"{folder} is not writable", "JAX's compilation cache is off (set MUTUAL_CACHE_DIR to a "
                  "writable folder to keep compiled programs between runs)")
         return
+    reason = insecure(folder)
+    if reason:
+        unusable(folder, reason, "JAX's compilation cache is off; " + advice(folder).removeprefix("running without it; "))
+        return
+    authenticate_entries(folder)
     values = {"jax_compilation_cache_dir": str(folder), "jax_persistent_cache_min_compile_time_secs":
               environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", str(MIN_COMPILE_SECONDS))}
     for option, variable in SETTINGS.items():
@@ -57,3 +90,117 @@ def use_persistent_cache(environ=os.environ):
         jax.config.update("jax_compilation_cache_dir", values["jax_compilation_cache_dir"])
         jax.config.update("jax_persistent_cache_min_compile_time_secs",
                           float(values["jax_persistent_cache_min_compile_time_secs"]))
+
+
+TARGET = "jax._src.compilation_cache"
+MAC_BYTES = 32
+_REPORTED = set()
+
+
+def authenticate_entries(folder):
+    """Make JAX's file cache in ``folder`` keep an HMAC with each entry and drop entries that do not verify
+    (module docstring): now if JAX's cache module is loaded, else when it is."""
+    if TARGET in sys.modules:
+        _wrap(sys.modules[TARGET], folder)
+    elif not any(isinstance(f, _OnImport) for f in sys.meta_path):
+        sys.meta_path.insert(0, _OnImport(folder))
+
+
+class _OnImport(importlib.abc.MetaPathFinder):
+    """Wraps JAX's cache module right after it is executed (it is imported by ``import jax``)."""
+
+    def __init__(self, folder):
+        self.folder = folder
+
+    def find_spec(self, name, path, target=None):
+        if name != TARGET:
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.loader is None:
+            return spec
+        execute, folder = spec.loader.exec_module, self.folder
+
+        def exec_module(module):
+            execute(module)
+            _wrap(module, folder)
+
+        spec.loader.exec_module = exec_module
+        return spec
+
+
+def _wrap(module, folder):
+    """Wrap ``module.get_file_cache`` (and a cache it made already) for ``folder``; without them, no cache."""
+    original = getattr(module, "get_file_cache", None)
+    if original is None or getattr(original, "authenticated", False) or not hasattr(module, "_cache"):
+        if original is None:
+            warnings.warn("JAX's compilation cache is off: this JAX version has no get_file_cache to authenticate "
+                          "its entries with", CacheWarning, stacklevel=2)
+            module.get_file_cache = lambda path: None
+        return
+    mine = os.path.realpath(folder)
+
+    def get_file_cache(path):
+        found = original(path)
+        if found is None or os.path.realpath(str(path)) != mine:
+            return found
+        return _authenticated(found[0]), found[1]
+
+    get_file_cache.authenticated = True
+    module.get_file_cache = get_file_cache
+    if module._cache is not None and os.path.realpath(str(module._cache._path)) == mine:
+        module._cache = _authenticated(module._cache)
+
+
+def write_text_bytes(path, data):
+    """Atomically write ``data`` to ``path`` (:func:`mutual.atomic.atomic_path`)."""
+    with atomic_path(path, suffix="") as tmp:
+        tmp.write_bytes(data)
+
+
+def _mac(secret, key, value):
+    return hmac.new(secret, b"jax\0" + key.encode() + b"\0" + bytes(value), hashlib.sha256).digest()
+
+
+def _authenticated(base):
+    """JAX's cache ``base`` with an HMAC before each entry (a subclass of JAX's cache interface)."""
+    from jax._src.compilation_cache_interface import CacheInterface
+
+    class AuthenticatedEntries(CacheInterface):
+        def __init__(self, inner):
+            self._inner, self._path = inner, inner._path
+
+        def get(self, key):
+            stored, secret = self._inner.get(key), secret_key()
+            if stored is None or secret is None:
+                return None
+            mac, value = stored[:MAC_BYTES], stored[MAC_BYTES:]
+            if hmac.compare_digest(mac, _mac(secret, key, value)):
+                return value
+            entry = Path(str(self._path)) / f"{key}-cache"
+            try:
+                entry.unlink()          # JAX's put keeps an existing entry: make room for the fresh one
+            except OSError:
+                pass
+            if str(self._path) not in _REPORTED:
+                _REPORTED.add(str(self._path))
+                warnings.warn(f"a compiled program in JAX's cache {entry} does not verify (changed after it was "
+                              "written, or written without your key): not run; compiling it anew", CacheWarning,
+                              stacklevel=2)
+            return None
+
+        def put(self, key, value):
+            secret = secret_key()
+            if secret is None:
+                return
+            stored = _mac(secret, key, value) + bytes(value)
+            entry = Path(str(self._path)) / f"{key}-cache"
+            if getattr(self._inner, "eviction_enabled", False) or entry.exists():
+                self._inner.put(key, stored)        # JAX's own bookkeeping (a size limit), or keep the entry
+                return
+            try:
+                write_text_bytes(entry, stored)     # whole or not at all: another process never reads half
+            except OSError:
+                pass
+
+    return AuthenticatedEntries(base)

@@ -1,5 +1,5 @@
 """Make ``pingouin_rm_anova.json``: pingouin's one-way ``rm_anova`` on the data sets below, the
-reference that ``tests/test_study_text_names.py`` checks ``mutual study anova`` against.
+reference that ``tests/cli/test_study.py`` checks ``mutual study anova`` against.
 
 pingouin is not in the compendium's lock (it would add scikit-learn, xarray and seaborn, about 82 MB,
 for one test; ``make bench-peers`` has it), so its values were computed once in a scratch venv and
@@ -31,7 +31,7 @@ def datasets():
     """name -> CSV text (subject, level, y); the generator's seeds are fixed."""
     rng = np.random.default_rng(2024)
     out = {
-        # issue 22's case: 01 and 1 are two people
+        # 01 and 1 are two people
         "ids_01_and_1": "subject,level,y\n01,a,1\n01,b,3\n1,a,2\n1,b,5\n2,a,4\n2,b,5\n",
         "levels_like_numbers": _long(["s1", "s2", "s3", "s4", "s5"], ["1", "1.0", "01"],
                                      rng.normal(10, 2, (5, 3)).round(3).tolist()),

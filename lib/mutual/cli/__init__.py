@@ -1,4 +1,4 @@
-"""The ``mutual`` command line: the thesis's methods on your own data (issue 11).
+"""The ``mutual`` command line: the thesis's methods on your own data.
 
 ::
 
@@ -39,7 +39,7 @@ Input formats: data/README.md. Cite: CITATION.cff.
 def build_parser():
     """The argparse parser of ``mutual`` with every command group registered."""
     from .. import __version__
-    parser = argparse.ArgumentParser(
+    parser = common.Parser(
         prog="mutual", formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EPILOG,
         description="Run the methods of 'Towards Mutual Understanding between Mortals and Machines in Motion "
                     "for Safety' (McPherson, 2022) on your own data.")

@@ -7,14 +7,19 @@ Only the standard library is imported at module level, so that ``mutual --help``
 numpy, pandas and matplotlib are imported inside the functions that need them.
 """
 
+import argparse
 import json
 import math
 import os
+import re
 import sys
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+from .. import budget
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 
 class InputError(Exception):
@@ -23,6 +28,38 @@ class InputError(Exception):
 
 class OutputError(Exception):
     """The outputs could not be written (a full disk, say); nothing was left in --out: one line, exit status 1."""
+
+
+#: an option value that starts with '-' but is a number or a list of numbers: -1, -0.5, -1e-3, -inf, -1,1
+_NEGATIVE_VALUE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(,.*)?$|^-(inf|infinity|nan)(,.*)?$", re.I)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse's parser for every ``mutual`` command: an option's value that starts with '-' and reads as a
+    number or a comma-separated list of numbers (``--w-max -1,1``, ``--rho -0.5``) is a value, not an option;
+    for any other value that starts with '-' the error says to write ``--option=VALUE``."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_VALUE
+
+    def error(self, message):
+        option = re.match(r"argument (--[\w-]+)(/-\w)?: expected one argument", message)
+        if option:
+            message += f" (a value that starts with '-' is written {option.group(1)}=VALUE)"
+        super().error(message)
+
+
+def command_group(subparsers, name, help, description):
+    """Add the group ``mutual NAME`` and return its commands (one of which must be given)."""
+    group = subparsers.add_parser(name, help=help, description=description)
+    return group.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
+
+
+def add_command(commands, name, help, description, example):
+    """Add a command to a group: ``description`` and ``example`` shown in ``--help`` as they are written."""
+    return commands.add_parser(name, help=help, description=description, epilog=example,
+                               formatter_class=argparse.RawDescriptionHelpFormatter)
 
 
 def add_output_options(parser):
@@ -34,134 +71,100 @@ def add_output_options(parser):
     group.add_argument("--json", action="store_true",
                        help="print the results as one JSON object on stdout instead of the readable summary")
     group.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    size = parser.add_argument_group("size")
+    size.add_argument("--allow-large", action="store_true",
+                      help="go ahead even when the work is estimated to need more memory than is available, or more "
+                           f"than ${budget.MINUTES_ENV} minutes (default {budget.MINUTES}); without it such a request "
+                           "is refused before it starts, with the estimate")
+
+
+_INPUTS = []   # the input files of the running command (an output set never replaces one)
 
 
 def existing_file(path):
-    """``path`` as a Path, or an InputError if it names no readable file."""
+    """``path`` as a Path, or an InputError if it names no readable file; remembered as an input of the run."""
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such file")
     if not path.is_file():
         raise InputError(f"{path}: not a file")
+    _INPUTS.append(path)
     return path
 
 
 @contextmanager
 def about(path):
-    """Turn a ValueError (or a parse error) raised while reading or analysing ``path`` into an
+    """Turn a ValueError (or a KeyError, TypeError) raised while reading or analysing ``path`` into an
     :class:`InputError` whose message starts with the file name."""
-    import pandas as pd
     try:
         yield
-    except InputError:
+    except (InputError, budget.TooLarge):
         raise
-    except pd.errors.EmptyDataError:
-        raise InputError(f"{path}: the file is empty (expected a header row and data rows)") from None
-    except pd.errors.ParserError as err:
-        raise InputError(f"{path}: not a readable CSV file ({_first_line(err)})") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a text file (it is not UTF-8)") from None
     except (ValueError, KeyError, TypeError) as err:
         message = _first_line(err)
         raise InputError(message if str(path) in message else f"{path}: {message}") from None
 
 
-def read_csv(path):
-    """The CSV table at ``path`` with every cell as text as written (:func:`mutual.csvfile.read_text_csv`:
-    ``01``, ``1``, ``NA`` and ``None`` are distinct names; only empty cells are missing; a duplicated
-    column name or another delimiter is refused), with the errors of :func:`about` (file named, one line)."""
-    from ..csvfile import read_text_csv
+def read_csv(path, columns=None):
+    """The CSV table at ``path`` with every cell as text as written, each row with its line in the file
+    (:func:`mutual.inputs.read_csv`: ``01``, ``1``, ``NA`` and ``None`` are distinct names; only empty cells
+    are missing; a repeated column name, another delimiter or a row with more fields than the header is
+    refused), ``columns`` required, with the errors of :func:`about` (file named, one line)."""
+    from ..inputs import read_csv as read_table
     with about(path):
-        frame = read_text_csv(path)
-    if frame.empty:
-        raise InputError(f"{path}: no data rows after the header")
-    return frame
-
-
-def require_columns(frame, columns, path):
-    """Raise an InputError naming the file and the first missing column."""
-    missing = [c for c in columns if c not in frame.columns]
-    if missing:
-        raise InputError(f"{path}: missing column {missing[0]!r} (the file has columns {list(frame.columns)})")
+        return read_table(path, columns)
 
 
 def numeric_column(frame, column, path):
-    """The column as floats, or an InputError naming the file, the line and the column."""
-    import numpy as np
-    import pandas as pd
-    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
-    bad = ~np.isfinite(values)
-    if bad.any():
-        row = int(bad.argmax())
-        line = int(frame.index[row]) + 2     # read_csv numbers data rows from 0; line 1 is the header
-        raw = frame[column].iloc[row]
-        what = "missing (empty or NA)" if pd.isna(raw) else f"{_shown(raw)} is not a finite number"
-        raise InputError(f"{path}: column {column!r}, line {line}: {what}")
-    return values
-
-
-def integer_column(frame, column, path, allow_empty=False):
-    """Check that every entry of the column is a whole number (or empty, with ``allow_empty``);
-    an InputError names the file, the column and the line of the first that is not."""
-    import numpy as np
-    import pandas as pd
-    raw = frame[column]
-    values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
-    empty = raw.isna().to_numpy() | (raw.astype(str).str.strip() == "").to_numpy()
-    with np.errstate(invalid="ignore"):
-        bad = ~np.isfinite(values) | (np.mod(values, 1) != 0)
-    bad &= ~empty if allow_empty else np.ones_like(bad)
-    if bad.any():
-        row = int(bad.argmax())
-        what = "empty" if empty[row] else f"{_shown(raw.iloc[row])} is not a whole number"
-        raise InputError(f"{path}: column {column!r}, line {int(frame.index[row]) + 2}: {what}")
-
-
-def output_path(args, name):
-    """``args.out / name``, refusing an ``--out`` that is a file (one file at a time: prefer :func:`output_set`)."""
-    check_out(args)
-    return Path(args.out) / name
-
-
-def write_csv(frame, path, **to_csv):
-    """Write a DataFrame atomically, numbers exactly unless ``float_format`` says otherwise (one file at a
-    time: prefer :func:`output_set`)."""
-    from ..atomic import atomic_path
-    from ..csvfile import format_exact
-    with atomic_path(path) as tmp:
-        frame.to_csv(tmp, index=False, **{"float_format": format_exact, **to_csv})
-    return Path(path)
-
-
-def save_figure(fig, path):
-    """Save a matplotlib figure atomically (PNG, 150 dpi) and close it (one file at a time: prefer :func:`output_set`)."""
-    import matplotlib.pyplot as plt
-    from ..atomic import atomic_path
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=150, bbox_inches="tight", metadata={"Software": None})
-    plt.close(fig)
-    return Path(path)
+    """The column as floats, or an InputError naming the file, the line and the column
+    (:func:`mutual.inputs.number_column`; numbers that differ only beyond a double's digits are refused too)."""
+    from ..inputs import number_column
+    with about(path):
+        return number_column(frame, column, distinct=True)
 
 
 def check_out(args):
-    """Refuse an ``--out`` that exists and is not a folder (before any work is done)."""
+    """Refuse an ``--out`` that exists and is not a folder, or is a link that leads nowhere (before any work)."""
     out = getattr(args, "out", None)
-    if out is not None and Path(out).exists() and not Path(out).is_dir():
+    if out is None:
+        return
+    out = Path(out)
+    if out.is_symlink() and not out.exists():
+        raise InputError(f"--out {out}: a symbolic link that leads to no folder ({_link_target(out)}); remove it or "
+                         "point it at a folder")
+    if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: exists and is not a folder")
+
+
+def _link_target(link):
+    try:
+        return f"it points to {os.readlink(link)}, which does not exist or loops back"
+    except OSError as err:
+        return err.strerror or str(err)
+
+
+STAGING = ".mutual-partial-"      # the hidden folder inside --out where a run's files wait for the commit
 
 
 class OutputSet:
     """The files of one run, written into a temporary folder (see :func:`output_set`)."""
 
-    def __init__(self, out, staging):
+    def __init__(self, out, staging, inputs=()):
         self.out, self.staging, self.names = Path(out), Path(staging), []
+        self.inputs = list(inputs)
 
     def path(self, name):
-        """Where to write the output ``name`` now; returns the staging path (the file lands in --out on success)."""
+        """Where to write the output ``name`` now; returns the staging path (the file lands in --out on success).
+        Raises InputError when the output would replace one of the run's input files."""
         if Path(name).name != name or name.startswith("."):
             raise ValueError(f"an output name must be a plain file name, got {name!r}")
         if name in self.names:
             raise ValueError(f"output {name!r} written twice")
+        final = self.final(name)
+        for source in self.inputs:
+            if final.exists() and source.exists() and os.path.samefile(final, source):
+                raise InputError(f"--out {self.out}: the output {name} would replace the input {source}; choose "
+                                 "another --out (nothing was written)")
         self.names.append(name)
         return self.staging / name
 
@@ -169,8 +172,8 @@ class OutputSet:
         return self.out / name
 
     def csv(self, frame, name):
-        """Write a DataFrame; numbers read back exactly (:func:`mutual.csvfile.format_exact`). Returns its final path."""
-        from ..csvfile import format_exact
+        """Write a DataFrame; numbers read back exactly (:func:`mutual.inputs.format_exact`). Returns its final path."""
+        from ..inputs import format_exact
         frame.to_csv(self.path(name), index=False, float_format=format_exact)
         return self.final(name)
 
@@ -188,45 +191,59 @@ class OutputSet:
 def output_set(args):
     """Write a command's outputs as a set: ``with output_set(args) as files: files.csv(table, "a.csv"); ...``.
 
-    The files go into a hidden temporary folder -- next to ``--out`` when it does not exist yet (then
-    renamed to it), else inside it (then each file is renamed into ``--out``) -- so a run that fails
-    while writing (a full disk, an error in a figure, Ctrl-C) leaves none of its outputs, and a run that
-    succeeds leaves all of them. A write that fails raises :class:`OutputError` naming ``--out``.
+    The run holds ``--out``'s lock (:mod:`mutual.folder_lock`, the notebook runner's too) from the first file
+    to the last, so a second run into the same folder stops at once instead of mixing its files with these.
+    The files go into a hidden staging folder inside ``--out`` and are renamed into it when all are written,
+    so a run that fails while writing (a full disk, an error in a figure, Ctrl-C, SIGTERM) leaves none of its
+    outputs, and a run that succeeds leaves all of them; a staging folder that a killed run left behind is
+    removed by the next run into that folder. An ``--out`` this run created is removed again when it stays
+    empty. An output never replaces one of the run's input files. A write that fails raises
+    :class:`OutputError` naming ``--out``.
     """
     import shutil
     import tempfile
+    from ..folder_lock import FolderBusy, hold
     out = Path(args.out)
     check_out(args)
-    fresh = not out.exists()
+    created = not out.exists()
     try:
-        (out.parent if fresh else out).mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name or 'out'}.partial-", dir=out.parent if fresh else out))
+        out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
-    files = OutputSet(out, staging)
+    done = False
     try:
-        try:
-            yield files
-        except OSError as err:
-            raise OutputError(f"--out {out}: could not write {Path(err.filename or '').name or 'the outputs'} "
-                              f"({err.strerror or err}); no output was left") from None
-        _commit(files, fresh)
+        with hold(out, lambda: f"--out {out}: another run is writing its outputs there now; let it finish, or "
+                               "choose another --out"):
+            for stale in out.glob(f"{STAGING}*"):     # left by a run killed while writing (we hold the folder)
+                shutil.rmtree(stale, ignore_errors=True)
+            try:
+                staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=out))
+            except OSError as err:
+                raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
+            files = OutputSet(out, staging, _INPUTS)
+            try:
+                try:
+                    yield files
+                except OSError as err:
+                    raise OutputError(f"--out {out}: could not write {Path(err.filename or '').name or 'the outputs'} "
+                                      f"({err.strerror or err}); no output was left") from None
+                _commit(files)
+                done = True
+            finally:
+                shutil.rmtree(staging, ignore_errors=True)
+    except FolderBusy as err:
+        raise InputError(str(err)) from None
     finally:
-        shutil.rmtree(staging, ignore_errors=True)
+        if created and not done:
+            try:
+                out.rmdir()                         # only when empty: what another run put there stays
+            except OSError:
+                pass
 
 
-def _commit(files, fresh):
-    """Move the staged files into --out: one rename of the folder, or one rename per file."""
+def _commit(files):
+    """Move the staged files into --out, one rename each (the folder is held, so no other run interleaves)."""
     out, staging = files.out, files.staging
-    if fresh:
-        try:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(staging, 0o777 & ~umask)        # a folder as mkdir makes it, not mkdtemp's 0700
-            os.rename(staging, out)
-            return
-        except OSError:
-            out.mkdir(parents=True, exist_ok=True)   # --out appeared meanwhile: move file by file
     clash = [n for n in files.names if (out / n).is_dir()]
     if clash:
         raise OutputError(f"--out {out}: {clash[0]!r} is a folder there; no output was written")
@@ -280,12 +297,29 @@ def report(args, summary, results):
 def run(args, prog):
     """Run ``args.handler(args)``; report bad input in one line (exit 2), never a traceback.
 
+    Every command runs within the limits of :mod:`mutual.budget` (``$MUTUAL_MAX_MINUTES`` and the memory
+    available; ``--allow-large`` lifts them): a request estimated beyond them is refused before it starts.
     Set ``MUTUAL_DEBUG=1`` to see the traceback of an unexpected error.
     """
+    _INPUTS.clear()
+    restore = _terminate_cleanly()
     try:
         check_out(args)
-        args.handler(args)
+        try:
+            minutes = budget.command_line_minutes()
+        except ValueError as err:
+            raise InputError(str(err)) from None
+        with budget.limits(minutes, getattr(args, "allow_large", False), "--allow-large"), \
+                warnings.catch_warnings():
+            warnings.showwarning = _show_warning(prog)
+            args.handler(args)
         return EXIT_OK
+    except budget.TooLarge as err:
+        return _fail(prog, str(err), EXIT_BAD_INPUT)
+    except MemoryError as err:        # what the estimate missed: one line, never a traceback
+        detail = f" ({_first_line(err)})" if str(err) else ""
+        return _fail(prog, f"ran out of memory{detail}; ask for less (fewer cells, steps, levels or demonstrations)",
+                     EXIT_FAILED)
     except InputError as err:
         return _fail(prog, str(err), EXIT_BAD_INPUT)
     except OutputError as err:
@@ -295,6 +329,8 @@ def run(args, prog):
         return _fail(prog, f"{where}{err.strerror or err}", EXIT_BAD_INPUT)
     except KeyboardInterrupt:
         return _fail(prog, "interrupted", EXIT_INTERRUPTED)
+    except Terminated:
+        return _fail(prog, "terminated (SIGTERM); no output of this run was left", EXIT_TERMINATED)
     except BrokenPipeError:           # the reader of stdout left (| head): the outputs are written; say nothing
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
@@ -303,24 +339,41 @@ def run(args, prog):
             raise
         return _fail(prog, f"{type(err).__name__}: {_first_line(err)} (set MUTUAL_DEBUG=1 for the traceback)",
                      EXIT_FAILED)
+    finally:
+        restore()
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived: raised where the command is, so that its output set cleans up as for Ctrl-C."""
+
+
+def _terminate_cleanly():
+    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only); returns the undo."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def terminated(signum, frame):
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, terminated)
+    return lambda: signal.signal(signal.SIGTERM, previous)
+
+
+def _show_warning(prog):
+    """Warnings about the input (:class:`mutual.inputs.InputWarning`) as one line ``PROG: warning: ...`` on stderr."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        if category.__name__ == "InputWarning":
+            print(f"{prog}: warning: {message}", file=sys.stderr)
+        else:
+            print(warnings.formatwarning(message, category, filename, lineno, line).rstrip(), file=sys.stderr)
+    return show
 
 
 def _fail(prog, message, status):
     print(f"{prog}: error: {message}", file=sys.stderr)
     return status
-
-
-def _shown(value):
-    """A cell's value as the user wrote it: numbers plainly, text quoted."""
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, str):
-        try:
-            float(value)
-            return value.strip() if value.strip() == value else repr(value)   # a number, as written
-        except ValueError:
-            return repr(value)
-    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _first_line(err):

@@ -7,6 +7,7 @@ its maximum-likelihood threshold psi* (eq. 3.3) and one constraint per action
 (Algorithm 4, eq. 2.25; :func:`mutual.constraints.greedy_inference`), until the stop rule fires.
 """
 
+from .. import budget
 from . import common, continuous
 
 DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 10, 0.1, 5
@@ -44,14 +45,11 @@ example:
 
 def register(subparsers):
     """Add ``mutual constraints`` and its ``infer`` command."""
-    import argparse
-    parser = subparsers.add_parser("constraints", help="constraints and chance thresholds from demonstrations "
-                                                       "(chapters 2-3)",
-                                   description="Learn constraints from stochastic demonstrations (chapters 2-3).")
-    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
-    infer = commands.add_parser("infer", help="greedy constraint inference with chance thresholds",
-                                description=DESCRIPTION, epilog=EXAMPLE,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = common.command_group(subparsers, "constraints",
+                                    "constraints and chance thresholds from demonstrations (chapters 2-3)",
+                                    "Learn constraints from stochastic demonstrations (chapters 2-3).")
+    infer = common.add_command(commands, "infer", "greedy constraint inference with chance thresholds", DESCRIPTION,
+                               EXAMPLE)
     infer.add_argument("demos", metavar="DEMOS.csv", help="the demonstrations (format: data/README.md)")
     infer.add_argument("--world", required=True, metavar="WORLD.toml", help="the gridworld they were demonstrated in")
     infer.add_argument("--rounds", type=int, default=DEFAULT_ROUNDS,
@@ -63,8 +61,7 @@ def register(subparsers):
                        help=f"candidates to print per round (default {DEFAULT_TOP}; the CSV has all)")
     common.add_output_options(infer)
     infer.set_defaults(handler=run_infer, prog=infer.prog)
-    continuous.register(commands)      # infer-continuous and simulate (issue 21)
-    return parser
+    continuous.register(commands)      # infer-continuous and simulate
 
 
 def _check_options(args):
@@ -93,7 +90,7 @@ def ranking_table(grid, cand, rounds, chosen):
     """One row per feasible candidate and round: its rank by F, F, -log F and exact gain; whether chosen."""
     import numpy as np
     import pandas as pd
-    from ..constraints.gridworld import GRID_ACTIONS
+    from ..constraints import GRID_ACTIONS
     rows = []
     for i, (log_f, gain) in enumerate(rounds):
         live = np.flatnonzero(np.isfinite(gain))
@@ -121,22 +118,11 @@ def run_infer(args):
     demos_path = common.existing_file(args.demos)
     world_path = common.existing_file(args.world)
     from ..constraints import constraint_candidates, greedy_inference, load_demonstrations
-    from ..constraints.world import load_world
+    from ..constraints import load_world
     with common.about(world_path):
         grid = load_world(world_path)
     mdp = grid.mdp
-    frame = common.read_csv(demos_path)        # the columns first, naming the line of a bad entry
-    common.require_columns(frame, ("demo", "t", "state", "action"), demos_path)
-    for column in ("demo", "t", "state"):
-        common.integer_column(frame, column, demos_path)
-    common.integer_column(frame, "action", demos_path, allow_empty=True)
-    t = frame["t"].astype(float)          # read as text: compare the numbers, not the strings
-    last = t == t.groupby(frame["demo"].astype(float)).transform("max")
-    gap = frame["action"].isna() & ~last
-    if gap.any():
-        row = int(gap.to_numpy().argmax())
-        raise common.InputError(f"{demos_path}: column 'action', line {row + 2}: empty, but only each "
-                                "demonstration's last row (largest t) may have no action")
+    budget.check(budget.gridworld_inference(mdp.n_states, mdp.n_actions, mdp.horizon, args.rounds))
     with common.about(demos_path):
         demos = load_demonstrations(demos_path, mdp)
         cand = constraint_candidates(mdp, demos)
@@ -176,7 +162,7 @@ def _figure(grid, cand, result):
     common.use_agg()
     import matplotlib.pyplot as plt
     import numpy as np
-    from ..constraints.plots import plot_actions, plot_states
+    from ..constraints import plot_actions, plot_states
     F = np.exp(result.log_f[0]) if result.log_f else np.full(len(cand), np.nan)
     states, actions = cand.kind == "state", cand.kind == "action"
     chosen_states = [cand.index[k] for k in result.chosen if states[k]]

@@ -1,49 +1,58 @@
-"""``mutual constraints infer-continuous`` and ``mutual constraints simulate`` (issue 21).
+"""``mutual constraints infer-continuous`` and ``mutual constraints simulate``.
 
-``infer-continuous`` reads recorded trajectories of a continuous system and its system file,
-discretizes the dynamics (:mod:`mutual.constraints.continuous`), proposes bounds, obstacles or cells
-as chance constraints and adds them greedily, best F first, until the stop rule fires.
+``infer-continuous`` reads recorded trajectories of a continuous system and its system file and
+infers the constraints the demonstrations respect (:mod:`mutual.constraints.continuous`): by default
+the exact likelihood of the continuous demonstrations with candidates as continuous parameters
+(``--model points``), or chapters 2-3's greedy inference on the discretized MDP (``--model cells``).
 ``simulate`` writes demonstrations to try it with: of a continuous system (by a demonstrator on the
 true dynamics that respects --hidden constraints) or of a gridworld (chapter 3's Boltzmann agent).
 Heavy libraries are imported inside the commands.
 """
 
-from . import common
+from contextlib import contextmanager
 
-DEFAULT_ROUNDS, DEFAULT_MIN_GAIN, DEFAULT_TOP = 5, 0.1, 5
+from .. import budget
+from . import common, continuous_sizes
+from .continuous_report import code_note, report_inference
+
+DEFAULT_ROUNDS, DEFAULT_TOP = 5, 5
+MIN_GAIN = {"points": 0.693, "cells": 0.1}   # inference.MIN_GAIN = log 2 (no numpy here; a test checks)
 FAMILIES = ("bound", "disk", "box", "cell")   # mutual.constraints.continuous.candidates.FAMILIES (no numpy here; a test checks)
 
 INFER_DESCRIPTION = f"""\
 Constraints from continuous demonstrations (an extension of chapters 2-3; Section 3.4's next step).
 
 The system file gives the dynamics, a box over the state space cut into cells, a control set, a
-time step and the demonstrator's task (a quadratic reward). The dynamics are discretized into a
-tabular MDP -- Monte Carlo within each cell (Stocking et al. 2021) or barycentric interpolation on a
-Kuhn triangulation (Munos and Moore) -- and the recordings mapped onto it: each state to its cell,
-each step to the nearest control of the set, or, where no control was recorded, to the control
-whose one-step prediction best explains the next state (reported as INFERRED).
+time step and the demonstrator's task (a quadratic reward).
 
-Candidates (--families, or [candidates] in the system file): "bound" (every cell edge of every
-coordinate, either side), "disk" and "box" (obstacles in the plane of two coordinates), "cell"
-(one per cell). Each is a chance constraint on the set R it covers: action a is allowed in x only
-if S(x, a, R) <= psi, with the maximum-likelihood psi of Lemma 3.2.1 (--thresholds lemma: the
-lowest psi that keeps every demonstration feasible; eq3.3: the thesis's eq. 3.3). Each round ranks
-them by F = Z_C+ / Z_C0 (Algorithm 4, eq. 2.25), prints the best --top with F and the exact
-log-likelihood gain per demonstration, and adds the smallest F; it stops before a constraint whose
--log F is below --min-gain (default {DEFAULT_MIN_GAIN} nats per demonstration) or after --rounds.
+--model points (default): the likelihood of the continuous demonstrations of the deterministic system
+is exact up to the partition function, which is computed on the grid's cells as points (the
+demonstrator knows its state: chance thresholds are psi = 0 per point, none is raised or dropped).
+For a tightening the demonstrations satisfy, the gain is -log F at their starts (eq. 2.25, exact for
+deterministic dynamics). Each round proposes the most likely member of each family -- "bound": the
+tightest bound the demonstrations satisfy, per coordinate and side; "disk" / "box": the largest
+obstacle in the plane of two coordinates that no demonstration enters, at the most likely centre,
+where the demonstrations pass it on more than one side -- and accepts the best if it raises the exact
+log-likelihood by --min-gain nats per demonstration (default log 2 = {MIN_GAIN["points"]}: more than half
+of the model's trajectories would cross it) and by log(K / 0.05) in all. Each accepted constraint comes with the interval of
+values whose likelihood is within a factor 20 of the best. The temperature is fitted by maximum
+likelihood, as are the weights of its features (the goal stays the file's); --temperature file or NUMBER
+keeps the file's reward at that temperature.
 
-Discretization runs in this process for small grids and on Dask for large ones (an embedded
-LocalCluster, or --scheduler ADDRESS / $MUTUAL_DASK_SCHEDULER); --inline never uses Dask. The result
-is the same wherever it runs.
+--model cells: the dynamics are discretized into a tabular MDP (Monte Carlo within cells, Stocking et
+al. 2021, or barycentric interpolation), the recordings mapped onto it, and chapters 2-3's candidates
+-- "bound" (every cell edge), "disk", "box", "cell" -- ranked by F = Z_C+ / Z_C0 (Algorithm 4) with
+chance thresholds set per cell (--thresholds lemma: Lemma 3.2.1; eq3.3); it stops before a constraint
+whose -log F is below --min-gain (default {MIN_GAIN["cells"]}). Discretization runs here for small grids and on
+Dask for large ones (--scheduler ADDRESS / $MUTUAL_DASK_SCHEDULER; --inline never uses Dask).
 
 TRAJ.csv: demo, t, one column per state coordinate, optionally one per control. SYSTEM.toml: system,
 [parameters], [state], [control], [time], [discretization], [reward], [candidates], [simulate].
 Formats: data/README.md.
 
-writes to --out:  continuous_ranking.csv (every scored candidate in every round: rank, the
-                  constraint in its units, psi, F, -log F, exact gain, chosen),
-                  continuous_chosen.csv (the accepted constraints), continuous_constraints.png
-                  (the demonstrations with the inferred regions, in pairs of coordinates)
+writes to --out:  continuous_ranking.csv (every candidate of every round in its units, with its gain),
+                  continuous_chosen.csv (the accepted constraints; points: with their intervals),
+                  continuous_constraints.png (the demonstrations with the inferred regions by round)
 """
 
 INFER_EXAMPLE = """\
@@ -76,24 +85,28 @@ examples:
 
 def register(commands):
     """Add ``infer-continuous`` and ``simulate`` to the ``mutual constraints`` commands."""
-    import argparse
-    infer = commands.add_parser("infer-continuous", help="constraints from continuous trajectories (extension)",
-                                description=INFER_DESCRIPTION, epilog=INFER_EXAMPLE,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    infer = common.add_command(commands, "infer-continuous", "constraints from continuous trajectories (extension)",
+                               INFER_DESCRIPTION, INFER_EXAMPLE)
     infer.add_argument("trajectories", metavar="TRAJ.csv", help="the recorded trajectories (format: data/README.md)")
     infer.add_argument("--system", required=True, metavar="SYSTEM.toml", help="the system, its grid and task")
     infer.add_argument("--families", metavar="LIST", help="candidate families, comma-separated: bound, disk, box, cell "
                                                           "(default: [candidates] families, else bound)")
     infer.add_argument("--rounds", type=int, default=DEFAULT_ROUNDS, help=f"at most this many constraints "
                                                                           f"(default {DEFAULT_ROUNDS})")
-    infer.add_argument("--min-gain", type=float, default=DEFAULT_MIN_GAIN, metavar="NATS",
-                       help=f"stop before a constraint whose -log F is below NATS per demonstration "
-                            f"(default {DEFAULT_MIN_GAIN})")
+    infer.add_argument("--model", choices=("points", "cells"), default="points",
+                       help="points: the exact likelihood of the continuous demonstrations (default); "
+                            "cells: chapters 2-3 on the discretized MDP")
+    infer.add_argument("--min-gain", type=float, metavar="NATS",
+                       help=f"accept a constraint only if it gains NATS per demonstration (points: exact gain, "
+                            f"default {MIN_GAIN['points']}; cells: -log F, default {MIN_GAIN['cells']})")
+    infer.add_argument("--temperature", metavar="fit|file|NUMBER", default="fit",
+                       help="points: fit the reward's weights by maximum likelihood (default), or keep the file's "
+                            "reward at its temperature (file) or at NUMBER")
     infer.add_argument("--top", type=int, default=DEFAULT_TOP, help=f"candidates printed per round (default {DEFAULT_TOP})")
     infer.add_argument("--cells", metavar="N[,N...]", help="cells per coordinate (overrides [state] cells)")
     infer.add_argument("--scheme", choices=("sample", "barycentric"), help="discretization (overrides the file)")
     infer.add_argument("--thresholds", choices=("lemma", "eq3.3"), default="lemma",
-                       help="chance thresholds: Lemma 3.2.1 exactly (default) or eq. 3.3")
+                       help="cells: chance thresholds by Lemma 3.2.1 exactly (default) or eq. 3.3")
     infer.add_argument("--truncate", action="store_true", help="cut demonstrations of different durations to the shortest")
     dask = infer.add_argument_group("where the discretization runs")
     dask.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786")
@@ -101,9 +114,9 @@ def register(commands):
     dask.add_argument("--inline", action="store_true", help="in this process, without Dask")
     common.add_output_options(infer)
     infer.set_defaults(handler=run_infer_continuous, prog=infer.prog)
-    simulate = commands.add_parser("simulate", help="write demonstrations of a system or a gridworld to try inference",
-                                   description=SIMULATE_DESCRIPTION, epilog=SIMULATE_EXAMPLE,
-                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    simulate = common.add_command(commands, "simulate",
+                                  "write demonstrations of a system or a gridworld to try inference",
+                                  SIMULATE_DESCRIPTION, SIMULATE_EXAMPLE)
     source = simulate.add_mutually_exclusive_group(required=True)
     source.add_argument("--system", metavar="SYSTEM.toml", help="a continuous system (writes trajectories.csv)")
     source.add_argument("--world", metavar="WORLD.toml", help="a gridworld (writes demonstrations.csv)")
@@ -125,14 +138,23 @@ def _check_options(args):
     for name, value, low in (("--rounds", args.rounds, 1), ("--top", args.top, 1)):
         if value < low:
             raise common.InputError(f"{name} {value}: must be at least {low}")
-    if not math.isfinite(args.min_gain) or args.min_gain < 0:
+    if args.min_gain is not None and (not math.isfinite(args.min_gain) or args.min_gain < 0):
         raise common.InputError(f"--min-gain {args.min_gain}: must be a finite number >= 0")
     if args.workers is not None and args.workers < 1:
         raise common.InputError(f"--workers {args.workers}: must be at least 1")
+    if args.temperature not in ("fit", "file"):
+        try:
+            value = float(args.temperature)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value) or value <= 0:
+            raise common.InputError(f"--temperature {args.temperature}: must be 'fit', 'file' or a positive number")
+    if args.model == "cells" and args.temperature != "fit":
+        raise common.InputError("--temperature: applies to --model points (the cells model uses the file's)")
 
 
 def _with_overrides(args, problem, system_path):
-    from ..constraints.continuous.experiments import with_cells
+    from ..constraints.continuous import with_cells
     if args.cells:
         try:
             cells = [int(c) for c in args.cells.split(",")]
@@ -150,8 +172,8 @@ def _with_overrides(args, problem, system_path):
 def run_infer_continuous(args):
     _check_options(args)
     traj_path, system_path = common.existing_file(args.trajectories), common.existing_file(args.system)
-    from ..constraints.continuous import infer, load_system, read_recording
-    from ..constraints.continuous.mapping import check_recording
+    continuous_sizes.check_inference(system_path, args)      # before the grid is built
+    from ..constraints.continuous import check_recording, infer, load_system, read_recording
     with common.about(system_path):
         spec = load_system(system_path)
     problem = _with_overrides(args, spec.problem, system_path)
@@ -160,77 +182,49 @@ def run_infer_continuous(args):
     if unknown:
         raise common.InputError(f"--families {args.families}: unknown family {unknown[0]!r}; choose from "
                                 f"{', '.join(FAMILIES)}")
+    if args.model == "points" and "cell" in families:
+        raise common.InputError("--families: 'cell' candidates need --model cells (the points model proposes "
+                                "bound, disk and box)")
     system = problem.system
-    with common.about(traj_path):
+    with common.about(traj_path), _dynamics_errors(system_path, system):
         recording = read_recording(traj_path, system.state_names, system.control_names)
         check_recording(problem, recording, args.truncate)
-    scheduler = "inline" if args.inline else (args.scheduler or "auto")
-    with common.progress(args, total=args.rounds + 2, desc="infer-continuous", unit="stage") as bar:
-        def progress(stage, detail):
-            bar.update(1)
+    with common.progress(args, total=100, desc="infer-continuous", unit="%",
+                         bar_format="{l_bar}{bar}| {n:.0f}% [{elapsed}] {postfix}") as bar:
+        def progress(fraction, detail):
+            bar.update(max(0.0, 100.0 * fraction - bar.n))
             bar.set_postfix_str(detail[:60])
 
-        with common.about(traj_path):
-            run = infer(problem, recording, families=families, rounds=args.rounds,
-                        min_gain=args.min_gain, truncate=args.truncate, scheduler=scheduler, workers=args.workers,
-                        progress=progress, thresholds=args.thresholds, plane=spec.candidates["plane"],
-                        every=spec.candidates["every"], radii=spec.candidates["radii"],
-                        half_widths=spec.candidates["half_widths"])
-    _report_inference(args, run, traj_path, system_path)
+        with common.about(traj_path), _dynamics_errors(system_path, problem.system):
+            gain = {} if args.min_gain is None else {"min_gain": args.min_gain}
+            run = infer(problem, recording, families=families, rounds=args.rounds, truncate=args.truncate,
+                        progress=progress, plane=spec.candidates["plane"], **gain, **_model_options(args, spec, problem))
+        bar.update(100 - bar.n)
+    report_inference(args, run, traj_path, system_path)
 
 
-def _report_inference(args, run, traj_path, system_path):
-    from ..constraints.continuous.plots import inference_figure
-    common.use_agg()
-    table = run.ranking()
-    chosen = run.chosen()
-    with common.output_set(args) as files:
-        outputs = {"ranking": files.csv(table, "continuous_ranking.csv"),
-                   "chosen": files.csv(chosen, "continuous_chosen.csv"),
-                   "figure": files.figure(inference_figure(run), "continuous_constraints.png")}
-    problem, mapped = run.problem, run.mapped
-    stopped = {"rounds": "rounds", "min_gain": "min-gain", "no feasible candidate": "no candidate left"}[run.result.stop]
-    results = {
-        "command": "constraints infer-continuous", "input": str(traj_path), "system": str(system_path),
-        "dynamics": problem.system.spec, "n_demonstrations": mapped.demos.n, "steps": mapped.demos.steps,
-        "dt": problem.dt, "cells": list(problem.grid.shape), "n_states": problem.grid.n_cells,
-        "n_controls": problem.n_actions, "scheme": problem.scheme, "thresholds": args.thresholds,
-        "controls": {"recorded_snapped": mapped.snapped, "inferred": mapped.inferred,
-                     "inferred_mean_miss_cells": mapped.miss, "zero_probability_steps_added": mapped.added},
-        "n_candidates": len(run.candidates), "thresholds_raised_by_lemma": run.candidates.raised,
-        "rounds": args.rounds, "min_gain": args.min_gain, "stopped": stopped,
-        "chosen": chosen.to_dict(orient="records"),
-        "ranking": [table[table["round"] == r].head(args.top).to_dict(orient="records")
-                    for r in range(1, len(run.rounds) + 1)] if len(table) else [],
-        "seconds": run.seconds, "outputs": {k: str(v) for k, v in outputs.items()},
-    }
-    common.report(args, _summary(results, mapped.notes()), results)
+def _model_options(args, spec, problem):
+    """The options of the chosen model: the points model's temperature and obstacle size, or the cells
+    model's discretization, thresholds and candidate lattice."""
+    if args.model == "points":
+        temperature = {"fit": "fit", "file": problem.reward.temperature}.get(args.temperature)
+        sizes = (spec.candidates["radii"] or []) + (spec.candidates["half_widths"] or [])
+        return {"temperature": float(args.temperature) if temperature is None else temperature,
+                "largest": max(sizes) if sizes else None}
+    return {"model": "cells", "scheduler": "inline" if args.inline else (args.scheduler or "auto"),
+            "workers": args.workers, "thresholds": args.thresholds, "every": spec.candidates["every"],
+            "radii": spec.candidates["radii"], "half_widths": spec.candidates["half_widths"]}
 
 
-def _summary(r, notes):
-    lines = [f"Constraints from {r['n_demonstrations']} continuous demonstrations of {r['steps']} steps of "
-             f"{r['dt']:g} s ({r['input']}), system {r['dynamics']!r} on {' x '.join(map(str, r['cells']))} cells, "
-             f"{r['n_controls']} controls, {r['scheme']} discretization",
-             f"Mapping: {notes}", f"{r['n_candidates']} candidates ({r['thresholds']} thresholds; "
-                                  f"{r['thresholds_raised_by_lemma']} raised above eq. 3.3)", ""]
-    for i, ranking in enumerate(r["ranking"], start=1):
-        lines.append(f"round {i}" + ("" if i <= len(r["chosen"]) else "  (not accepted: stop rule)"))
-        lines.append(f"  {'rank':>4}  {'constraint':<46}{'psi':>7}{'F':>11}{'-log F':>9}{'exact gain':>12}")
-        for row in ranking:
-            mark = "  <- chosen" if row["chosen"] else ""
-            lines.append(f"  {row['rank']:>4}  {row['constraint'][:45]:<46}{row['psi']:>7.3f}{row['F']:>11.4g}"
-                         f"{row['neg_log_F']:>9.4f}{row['exact_gain']:>12.4f}{mark}")
-        lines.append("")
-    why = {"rounds": f"--rounds {r['rounds']} reached",
-           "min-gain": f"the best remaining constraint gains less than --min-gain {r['min_gain']:g} nats per demonstration",
-           "no candidate left": "no feasible candidate left"}[r["stopped"]]
-    lines.append(f"Stopped: {why}. Chosen constraints ({len(r['chosen'])}):")
-    for row in r["chosen"]:
-        lines.append(f"  round {row['round']}: {row['constraint']} (psi = {row['psi']:.3f}), F = {row['F']:.4g}, "
-                     f"exact gain {row['exact_gain']:.4f} nats/demo")
-    lines += ["", "F: Z_C+/Z_C0 (Algorithm 4); exact gain: per-demonstration increase of the log-likelihood.",
-              "wrote " + ", ".join(r["outputs"].values())]
-    return "\n".join(lines)
+@contextmanager
+def _dynamics_errors(system_path, system):
+    """A failure inside the dynamics (a user's ``module:function``) named by the system file, not the recordings."""
+    try:
+        yield
+    except ValueError as err:
+        if str(err).startswith(f"system {system.spec!r}"):
+            raise common.InputError(f"{system_path}: key 'system': {err}") from None
+        raise
 
 
 def run_simulate(args):
@@ -245,9 +239,10 @@ def run_simulate(args):
 
 def _simulate_system(args):
     import numpy as np
-    from ..constraints.continuous import demonstrators as dm
-    from ..constraints.continuous import load_system, parse_region, write_recording
+    from ..constraints.continuous import (load_system, mppi_rollouts, parse_region, rollout, soft_demonstrator,
+                                          starts_around, write_recording)
     path = common.existing_file(args.system)
+    continuous_sizes.check_simulation(path, args)            # before the grid is built
     with common.about(path):
         spec = load_system(path)
     problem, sim = spec.problem, dict(spec.simulate)
@@ -256,18 +251,21 @@ def _simulate_system(args):
         hidden = [parse_region(text, problem.grid.names, spec.candidates["plane"]) for text in texts]
     except ValueError as err:
         raise common.InputError(f"--hidden: {err}") from None
+    from ..constraints.continuous import check_start
+    with common.about(path):
+        check_start(hidden, texts, sim["start"], sim["spread"], f"{path}: key 'simulate.start'")
     n, seed = args.n or sim["n"], sim["seed"] if args.seed is None else args.seed
     kind = args.demonstrator or sim["demonstrator"]
     noise = sim["noise"] if args.noise is None else args.noise
-    starts = dm.starts_around(sim["start"], sim["spread"], n, seed)
+    starts = starts_around(sim["start"], sim["spread"], n, seed)
     with common.about(path), common.progress(args, total=1, desc=f"simulating ({kind})", unit="run") as bar:
         if kind == "soft":
-            demonstrator = dm.soft_demonstrator(problem, hidden, sim["fine_cells"], temperature=sim["temperature"])
-            recording = dm.rollout(demonstrator, starts, seed + 1, noise, sim["record_every"])
+            demonstrator = soft_demonstrator(problem, hidden, sim["fine_cells"], temperature=sim["temperature"])
+            recording = rollout(demonstrator, starts, seed + 1, noise, sim["record_every"])
         else:
-            recording = dm.mppi_rollouts(problem.replace(reward=_tempered(problem.reward, sim["temperature"])), hidden,
-                                         starts, seed + 1, sim["samples"], sim["plan_steps"], sim["sigma"], noise,
-                                         sim["record_every"], sim["margin"])
+            recording = mppi_rollouts(problem.replace(reward=_tempered(problem.reward, sim["temperature"])), hidden,
+                                      starts, seed + 1, sim["samples"], sim["plan_steps"], sim["sigma"], noise,
+                                      sim["record_every"], sim["margin"])
         bar.update(1)
     if args.no_controls:
         from dataclasses import replace
@@ -278,11 +276,13 @@ def _simulate_system(args):
     out = files.final("trajectories.csv")
     states = np.concatenate(recording.states)
     ranges = {name: [float(states[:, i].min()), float(states[:, i].max())] for i, name in enumerate(problem.grid.names)}
-    results = {"command": "constraints simulate", "system": str(path), "demonstrator": kind, "hidden": list(texts),
+    results = {"command": "constraints simulate", "system": str(path), "dynamics": problem.system.spec,
+               "dynamics_file": problem.system.file, "demonstrator": kind, "hidden": list(texts),
                "n_demonstrations": n, "seed": seed, "noise": noise, "samples_per_demonstration": len(recording.times[0]),
                "period_seconds": float(recording.times[0][1] - recording.times[0][0]), "ranges": ranges,
                "controls_written": not args.no_controls, "outputs": {"trajectories": str(out)}}
-    lines = [f"Simulated {n} demonstrations of {problem.system.spec!r} ({kind} demonstrator on the continuous dynamics, "
+    lines = [f"Simulated {n} demonstrations of {problem.system.spec!r}{code_note(problem.system.file)} ({kind} demonstrator "
+             "on the continuous dynamics, "
              f"seed {seed}) under hidden constraints: {', '.join(texts) or 'none'}",
              *[f"  {name}: {lo:.4g} .. {hi:.4g}" for name, (lo, hi) in ranges.items()], f"wrote {out}"]
     common.report(args, "\n".join(lines), results)
@@ -295,7 +295,7 @@ def _tempered(reward, temperature):
 
 def _grid_hidden(texts, grid):
     """Chapter 3's ground truth from "cell COL ROW [psi P]" and "action NAME"."""
-    from ..constraints.gridworld import GRID_ACTIONS
+    from ..constraints import GRID_ACTIONS
     states, psi, actions = [], [], []
     for text in texts:
         words = text.split()
@@ -319,7 +319,7 @@ def _grid_hidden(texts, grid):
 
 def _simulate_world(args):
     from ..constraints import constraint_mask, sample_demonstrations, write_demonstrations
-    from ..constraints.world import load_world
+    from ..constraints import load_world
     path = common.existing_file(args.world)
     with common.about(path):
         grid = load_world(path)
@@ -327,6 +327,7 @@ def _simulate_world(args):
     if any(not 0 <= p <= 1 for p in psi):
         raise common.InputError("--hidden: psi must lie in [0, 1]")
     n, seed = args.n or 100, args.seed or 0
+    budget.check(budget.demonstrations(n, grid.mdp.horizon))
     with common.about(path):
         mask = constraint_mask(grid.mdp, states, psi if psi else 0.0, actions)
         demos = sample_demonstrations(grid.mdp, n, mask, rng=seed)

@@ -6,6 +6,7 @@ anticipation, eq. 6.16; the multi-distractor QP of section 6.5 with ``eta``) or 
 car), and writes the trajectory as CSV and a figure beside the predictable (H1-optimal) motion.
 """
 
+from .. import budget
 from . import common
 
 DESCRIPTION = """\
@@ -31,17 +32,14 @@ example:
 
 def register(subparsers):
     """Add ``mutual motion`` and its ``legible`` command."""
-    import argparse
-    parser = subparsers.add_parser("motion", help="legible motion between a goal and distractors (chapters 6-7)",
-                                   description="Robots informing humans through motion (chapters 6-7).")
-    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
-    legible = commands.add_parser("legible", help="legible LQR / iLQR trajectory from a TOML spec",
-                                  description=DESCRIPTION, epilog=EXAMPLE,
-                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = common.command_group(subparsers, "motion",
+                                    "legible motion between a goal and distractors (chapters 6-7)",
+                                    "Robots informing humans through motion (chapters 6-7).")
+    legible = common.add_command(commands, "legible", "legible LQR / iLQR trajectory from a TOML spec", DESCRIPTION,
+                                 EXAMPLE)
     legible.add_argument("spec", metavar="SPEC.toml", help="the legibility spec (format: data/README.md)")
     common.add_output_options(legible)
     legible.set_defaults(handler=run_legible, prog=legible.prog)
-    return parser
 
 
 def trajectory_table(spec, solution):
@@ -66,10 +64,11 @@ def trajectory_table(spec, solution):
 
 
 def run_legible(args):
-    from ..motion.spec import load_legible_spec, solve_legible
+    from ..motion import load_legible_spec, solve_legible
     path = common.existing_file(args.spec)
     with common.about(path):
         spec = load_legible_spec(path)
+    budget.check(budget.legible(spec.steps, 1 + len(spec.distractors), spec.dynamics))     # before the solve starts
     with common.progress(args, total=1, desc=f"solving ({spec.method})", unit="problem") as bar:
         with common.about(path):
             solution = solve_legible(spec)

@@ -1,4 +1,4 @@
-"""``mutual study power``: plan a replication of the chapter 5 study (issue 16), in G*Power's words (issue 22).
+"""``mutual study power``: plan a replication of the chapter 5 study, in G*Power's words.
 
 Three answers, in :func:`run_power`:
 
@@ -18,9 +18,9 @@ Wiring: ``register(study_subparsers)`` adds the ``power`` command to the ``study
 """
 
 import argparse
-import math
 import sys
 
+from .. import budget
 from . import common
 
 PROG = "mutual study power"
@@ -29,7 +29,7 @@ MIX_NAMES = ("thesis", "mostly-standard", "mostly-gradual")
 #: what one request may ask for: sample sizes listed, the largest N (analytic, simulated), cohorts
 MAX_SIZES, MAX_N_ANALYTIC, MAX_N_SIMULATED, MAX_COHORTS = 10_000, 100_000, 1_000, 100_000
 #: measured (README, "Planning a replication"): one simulated participant on the full grid with 60-s trials
-SECONDS_PER_PARTICIPANT = 0.32
+SECONDS_PER_PARTICIPANT = budget.PARTICIPANT_SECONDS
 
 DESCRIPTION = """\
 Power and sample size of a one-way repeated-measures study, analytic (G*Power's "ANOVA: repeated
@@ -128,25 +128,27 @@ def _whole(least, option):
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-        if value < least:
-            raise argparse.ArgumentTypeError(f"{option} must be a whole number >= {least}, got {value}")
-        return value
+        return _checked_value(option, value, low=least, integer=True)
     return parse
 
 
-def _real(option, low=-math.inf, high=math.inf, low_open=False, high_open=False):
+def _real(option, low=None, high=None, low_open=False, high_open=False):
     def parse(text):
         try:
             value = float(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-        below = value <= low if low_open else value < low
-        above = value >= high if high_open else value > high
-        if not math.isfinite(value) or below or above:
-            lo, hi = ("(" if low_open else "[") + f"{low:g}", f"{high:g}" + (")" if high_open else "]")
-            raise argparse.ArgumentTypeError(f"{option} must be a finite number in {lo}, {hi}, got {text}")
-        return value
+        return _checked_value(option, value, low, high, low_open, high_open)
     return parse
+
+
+def _checked_value(option, value, *bounds, **kind):
+    """``value`` checked by :func:`mutual.inputs.check_number`, its error as argparse's (one line, the option named)."""
+    from ..inputs import check_number
+    try:
+        return check_number(option, value, *bounds, **kind)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def add_arguments(parser):
@@ -192,9 +194,8 @@ def add_arguments(parser):
 
 def register(study_subparsers):
     """Add ``power`` to the ``mutual study`` command group."""
-    parser = study_subparsers.add_parser("power", help="power and sample size: G*Power's analytic and SIMULATED",
-                                         description=DESCRIPTION, epilog=EXAMPLE,
-                                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = common.add_command(study_subparsers, "power", "power and sample size: G*Power's analytic and SIMULATED",
+                                DESCRIPTION, EXAMPLE)
     add_arguments(parser)
     parser.set_defaults(handler=run_power, prog=parser.prog)
     return parser
@@ -202,6 +203,7 @@ def register(study_subparsers):
 
 def _checked(args):
     """Refuse options that do not go together, and fill in the defaults of the mode chosen."""
+    from ..inputs import number_text
     given = [name for name in SIMULATION_OPTIONS if getattr(args, name) is not None]
     if args.f is not None:
         if args.from_f is not None:
@@ -212,15 +214,16 @@ def _checked(args):
         args.m = 3 if args.m is None else args.m
         args.rho = 0.5 if args.rho is None else args.rho
         if args.rho < -1 / (args.m - 1):
-            raise ValueError(f"--rho {args.rho:g}: below -1/(m-1) = {-1 / (args.m - 1):.4g} for --m {args.m}, no "
-                             "covariance matrix has equal correlations")
+            raise ValueError(f"--rho {number_text(args.rho)}: below -1/(m-1) = {number_text(-1 / (args.m - 1))} for "
+                             f"--m {args.m}, no covariance matrix has equal correlations")
     else:
         if args.rho is not None:
             raise ValueError("--rho goes with --f: the partial eta squared of a reported F already holds the correlation")
         args.from_f = args.from_f or [8.72, 2.0, 20.0]
         F, df1, df2 = args.from_f
         if not (df1.is_integer() and df2.is_integer() and df1 >= 1 and df2 >= 1):
-            raise ValueError(f"--from-f: degrees of freedom must be whole numbers >= 1, got {df1:g} {df2:g}")
+            raise ValueError(f"--from-f: degrees of freedom must be whole numbers >= 1, got {number_text(df1)} "
+                             f"{number_text(df2)}")
         if df1 + 1 > MAX_SIZES or df2 / df1 + 1 > MAX_N_ANALYTIC:
             raise ValueError(f"--from-f: F({df1:g}, {df2:g}) implies {df1 + 1:g} levels and {df2 / df1 + 1:g} subjects; "
                              f"at most {MAX_SIZES:,} levels and {MAX_N_ANALYTIC:,} subjects")
@@ -229,11 +232,11 @@ def _checked(args):
         args.m = int(df1) + 1
     low = [p for p in args.power if p <= args.alpha]
     if low:
-        raise ValueError(f"--power {low[0]:g}: a target power must exceed --alpha {args.alpha:g} (the power at zero "
-                         "effect)")
+        raise ValueError(f"--power {number_text(low[0])}: a target power must exceed --alpha {number_text(args.alpha)} "
+                         "(the power at zero effect)")
     if args.eps < 1 / (args.m - 1) - 1e-12:
-        raise ValueError(f"--eps {args.eps:g}: epsilon lies in [1/(m-1), 1] = [{1 / (args.m - 1):.4g}, 1] for "
-                         f"{args.m} measurements")
+        raise ValueError(f"--eps {number_text(args.eps)}: epsilon lies in [1/(m-1), 1] = "
+                         f"[{number_text(1 / (args.m - 1))}, 1] for {args.m} measurements")
     defaults = {"cohorts": 60, "mix": "thesis", "noise": 1.0, "quick": False, "seed": 0, "inline": False,
                 "no_cache": False}
     for name, value in defaults.items():
@@ -242,13 +245,13 @@ def _checked(args):
 
 
 def gpower(args):
-    from ..study.power import gpower_table
+    from ..study import gpower_table
     sizes = parse_sizes(args.n) if args.n else []
     return gpower_table(args.m, args.f, args.rho, args.eps, args.alpha, sizes, args.power, n_max=MAX_N_ANALYTIC)
 
 
 def analytic(args):
-    from ..study.power import effect_size_from_f, replication_plan
+    from ..study import effect_size_from_f, replication_plan
     F, df1, df2 = args.from_f
     est = effect_size_from_f(F, int(df1), int(df2))
     return est, replication_plan(F, int(df1), int(df2), targets=tuple(args.power), alpha=args.alpha,
@@ -259,18 +262,22 @@ def simulate(args):
     sizes = parse_sizes(args.n or ["6:40:2", "11"], MAX_N_SIMULATED, "a simulated cohort")
     if args.cohorts > MAX_COHORTS:
         raise ValueError(f"--cohorts {args.cohorts:,}: more than {MAX_COHORTS:,}" + _cost(max(sizes), args.cohorts))
-    from ..study import cohort, cohort_power as cp, power_summary as ps, sweep
+    import os
+    workers = 1 if args.inline else (args.workers or os.cpu_count() or 1)
+    budget.check(budget.power_simulation(args.cohorts, max(sizes), workers))
+    from ..study import (CohortSetting, CohortTask, TaskCache, code_version, implied_effect, power_table,
+                         recommendations, run_tasks, simulate_cohort, study_value_functions)
 
-    setting = cp.CohortSetting(mix=args.mix, noise_scale=args.noise,
-                               **({"n_scenes": 15, "trial_seconds": 20.0, "quick_grid": True} if args.quick else {}))
-    library, conservative = cohort.study_value_functions(quick=setting.quick_grid)
-    tasks = [cp.CohortTask(setting, c, max(sizes), args.seed) for c in range(args.cohorts)]
-    cache = None if args.no_cache else sweep.TaskCache(cp.code_version())
-    cohorts, stats = sweep.run_tasks(cp.simulate_cohort, tasks, shared=(library, conservative), cache=cache,
-                                     scheduler="inline" if args.inline else args.scheduler, workers=args.workers,
-                                     progress=not args.no_progress, desc="cohorts")
-    table = ps.power_table(cohorts, sizes, args.alpha)
-    return setting, sizes, table, ps.recommendations(table), ps.implied_effect(cohorts), stats
+    setting = CohortSetting(mix=args.mix, noise_scale=args.noise,
+                            **({"n_scenes": 15, "trial_seconds": 20.0, "quick_grid": True} if args.quick else {}))
+    library, conservative = study_value_functions(quick=setting.quick_grid)
+    tasks = [CohortTask(setting, c, max(sizes), args.seed) for c in range(args.cohorts)]
+    cache = None if args.no_cache else TaskCache(code_version())
+    cohorts, stats = run_tasks(simulate_cohort, tasks, shared=(library, conservative), cache=cache,
+                               scheduler="inline" if args.inline else args.scheduler, workers=args.workers,
+                               progress=not args.no_progress, desc="cohorts")
+    table = power_table(cohorts, sizes, args.alpha)
+    return setting, sizes, table, recommendations(table), implied_effect(cohorts), stats
 
 
 def run_power(args):
@@ -307,22 +314,22 @@ def _figure(table, setting, args):
     common.use_agg()
     import matplotlib.pyplot as plt
 
-    from ..study import power_plots
+    from ..study import finish_power_axes, plot_simulated_power
     from ..style import PALETTE
     fig, ax = plt.subplots(figsize=(6, 3.8))
     for test, colour in (("anova_gg", PALETTE["blue"]), ("tukey Standard-Learned", PALETTE["orange"]),
                          ("holm Standard-Learned", PALETTE["purple"])):
-        power_plots.plot_simulated_power(ax, table, test, test, colour)
-    power_plots.finish_power_axes(ax, f"SIMULATED power ({setting.label}, {args.cohorts} cohorts per N, 95% CI)",
-                                  sorted(table["n"].unique()))
+        plot_simulated_power(ax, table, test, test, colour)
+    finish_power_axes(ax, f"SIMULATED power ({setting.label}, {args.cohorts} cohorts per N, 95% CI)",
+                      sorted(table["n"].unique()))
     ax.legend(fontsize=7, loc="lower right")
     return fig
 
 
 def main(argv=None):
     """``mutual study power`` on its own (``python -m mutual.cli.power``); returns the exit status."""
-    parser = argparse.ArgumentParser(prog=PROG, description=DESCRIPTION, epilog=EXAMPLE,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = common.Parser(prog=PROG, description=DESCRIPTION, epilog=EXAMPLE,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(parser)
     parser.set_defaults(handler=run_power)
     return common.run(parser.parse_args(argv), PROG)

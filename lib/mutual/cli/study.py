@@ -8,10 +8,12 @@ term (:func:`mutual.study.tukey_rm`) and paired t-tests with Holm's correction
 level names the ``--within`` column holds.
 """
 
+import hashlib
 import importlib
 import math
 import re
 
+from .. import budget
 from . import common
 
 #: Further ``mutual study`` subcommands: names of modules of ``mutual.cli`` that define
@@ -34,7 +36,9 @@ machine): 2.5-3.3 s of CPU, most of it importing scipy.stats, pandas and matplot
 
 writes to --out:  anova_<name>.csv (the test), pairwise_<name>.csv (Tukey and Holm),
                   cells_<name>.csv (the subject x level table analysed),
-                  means_<name>.png (level means with SE bars and Tukey brackets)
+                  means_<name>.png (level means with SE bars and Tukey brackets; no brackets above
+                  6 levels, no figure above 30: the tables hold them); <name>: --dv and the --where
+                  values, with a hash of them where they hold characters other than A-Z a-z 0-9 _ . -
 """
 
 EXAMPLE = """\
@@ -46,13 +50,10 @@ example:
 
 def register(subparsers):
     """Add ``mutual study`` and its subcommands (``anova``, then ``EXTENSIONS``)."""
-    import argparse
-    parser = subparsers.add_parser("study", help="repeated-measures statistics of a user study (chapter 5)",
-                                   description="Statistics of a repeated-measures user study (chapter 5).")
-    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
-    anova = commands.add_parser("anova", help="repeated-measures ANOVA, Greenhouse-Geisser, Tukey and Holm",
-                                description=DESCRIPTION, epilog=EXAMPLE,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = common.command_group(subparsers, "study", "repeated-measures statistics of a user study (chapter 5)",
+                                    "Statistics of a repeated-measures user study (chapter 5).")
+    anova = common.add_command(commands, "anova", "repeated-measures ANOVA, Greenhouse-Geisser, Tukey and Holm",
+                               DESCRIPTION, EXAMPLE)
     anova.add_argument("data", metavar="DATA.csv", help="a CSV table with a header row")
     anova.add_argument("--dv", required=True, metavar="COL",
                        help="the numeric column to analyse; in a tidy trial table (columns measure, value) "
@@ -70,7 +71,6 @@ def register(subparsers):
     anova.set_defaults(handler=run_anova, prog=anova.prog)
     for name in EXTENSIONS:
         importlib.import_module(f"{__package__}.{name}").register(commands)
-    return parser
 
 
 def _filters(where):
@@ -85,12 +85,14 @@ def _filters(where):
 
 def _select(frame, args, path):
     """The rows and columns to analyse, with the file, column and line named on bad input."""
+    from ..inputs import name_column, require_columns
     filters = _filters(args.where)
     if args.dv not in frame.columns and {"measure", "value"} <= set(frame.columns) \
             and (frame["measure"] == args.dv).any():
         # a tidy trial table: --dv names a measure, analysed in the column 'value'
         frame = frame[frame["measure"] == args.dv].rename(columns={"value": args.dv})
-    common.require_columns(frame, [args.dv, args.within, args.subject] + [c for c, _ in filters], path)
+    with common.about(path):
+        require_columns(frame, [args.dv, args.within, args.subject] + [c for c, _ in filters])
     for column, value in filters:
         keep = frame[column].fillna("") == value          # compared as text, as written
         if not keep.any():
@@ -98,13 +100,9 @@ def _select(frame, args, path):
             raise common.InputError(f"{path}: no row has {column} = {value!r} (column {column!r} holds "
                                     f"{[_shown(v) for v in seen[:12]]})")
         frame = frame[keep]
-    from ..csvfile import check_names
-    for column in (args.subject, args.within):
-        empty = frame[column].isna() | (frame[column].fillna("").str.strip() == "")
-        if empty.any():
-            raise common.InputError(f"{path}: column {column!r}, line {int(frame.index[empty.argmax()]) + 2}: empty")
-        with common.about(path):
-            check_names(frame[column].tolist(), column, path, row=lambda i: f"line {int(frame.index[i]) + 2}")
+    with common.about(path):
+        for column in (args.subject, args.within):
+            name_column(frame, column, strip=False)      # empty names and names that differ only by spaces
     data = frame[[args.subject, args.within]]
     return data.assign(**{args.dv: common.numeric_column(frame, args.dv, path)})
 
@@ -116,8 +114,12 @@ def _shown(name, width=40):
 
 
 def _stem(args):
-    parts = [args.dv] + [v for _, v in _filters(args.where)]
-    return re.sub(r"[^A-Za-z0-9_.-]+", "-", "_".join(parts)).strip("-")[:80] or "dv"
+    """The outputs' name: the --dv and --where values as written, or, where they hold other characters or run
+    long, their cleaned form plus a hash of the text, so that two requests (--dv 'a b', --dv 'a-b') never share
+    file names."""
+    text = "_".join([args.dv] + [v for _, v in _filters(args.where)])
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "-", text).strip("-")[:80] or "dv"
+    return stem if stem == text else f"{stem}-{hashlib.sha256(text.encode()).hexdigest()[:8]}"
 
 
 def analyse(data, dv, within, subject, aggregate=None, levels=None):
@@ -139,6 +141,10 @@ def analyse(data, dv, within, subject, aggregate=None, levels=None):
     }
 
 
+MAX_PLOTTED_LEVELS = 30       # more bars than this are unreadable: the tables are written without the figure
+MAX_BRACKETS = 15             # Tukey brackets drawn above the bars (all pairs of 6 levels); more hide the bars
+MAX_PRINTED_PAIRS = 45        # pairs listed in the summary (all pairs of 10 levels); the CSV has every pair
+
 TABLE_COLUMNS = ("dv", "within", "subject", "n_subjects", "ss_effect", "ss_error", "ss_subjects", "df1", "df2",
                  "ms_effect", "ms_error", "F", "p", "eps", "p_gg", "eta2p", "eta2g", "mse")
 
@@ -156,6 +162,8 @@ def run_anova(args):
             raise common.InputError(f"{path}: --levels: no row has {args.within} = {_shown(absent[0])} "
                                     f"(column {args.within!r} holds {[_shown(v) for v in present[:12]]})")
         data = data[data[args.within].isin(levels)]
+    k, n = data[args.within].nunique(), data[args.subject].nunique()
+    budget.check(budget.anova(k, n))          # before any pair is tested: 1000 levels are 499,500 pairs
     with common.about(path):
         try:
             anova, pairwise, results = analyse(data, args.dv, args.within, args.subject, args.aggregate, levels)
@@ -172,8 +180,12 @@ def run_anova(args):
     with common.output_set(args) as files:
         outputs = {"anova": files.csv(table, f"anova_{stem}.csv"),
                    "pairwise": files.csv(pairwise, f"pairwise_{stem}.csv"),
-                   "cells": files.csv(anova.cells.reset_index(), f"cells_{stem}.csv"),
-                   "figure": files.figure(_figure(anova, pairwise, args), f"means_{stem}.png")}
+                   "cells": files.csv(anova.cells.reset_index(), f"cells_{stem}.csv")}
+        if len(anova.levels) <= MAX_PLOTTED_LEVELS:
+            outputs["figure"] = files.figure(_figure(anova, pairwise, args), f"means_{stem}.png")
+        else:
+            results["note_figure"] = (f"no figure: {len(anova.levels):,} levels are more than the {MAX_PLOTTED_LEVELS} "
+                                      "a readable bar chart holds; the tables have every level and pair")
     results["outputs"] = {k: str(v) for k, v in outputs.items()}
     common.report(args, _summary(results, args), results)
 
@@ -181,10 +193,11 @@ def run_anova(args):
 def _figure(anova, pairwise, args):
     common.use_agg()
     import matplotlib.pyplot as plt
-    from ..study.plots import plot_condition_means
+    from ..study import plot_condition_means
     anova, unit = _plotted(anova)
     fig, ax = plt.subplots(figsize=(1.6 + 1.1 * len(anova.levels), 3.4))
-    plot_condition_means(ax, anova, pairwise.rename(columns={"p_tukey": "p"}))
+    brackets = pairwise.rename(columns={"p_tukey": "p"}) if len(pairwise) <= MAX_BRACKETS else None
+    plot_condition_means(ax, anova, brackets)
     low, top = float(anova.cells.to_numpy().min()), ax.get_ylim()[1]
     if low < 0:                                   # the bars start at 0; show negative values too
         ax.set_ylim(low - 0.05 * (top - low), top)
@@ -193,8 +206,8 @@ def _figure(anova, pairwise, args):
     ax.set_ylabel(_cut(f"{selected} ({args.dv})" if selected else args.dv) + unit
                   + ("\nmean per subject and level" if args.aggregate else ""))
     # the title in lines no wider than the axes (a long one was cut at the figure's right edge)
-    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects})\ngrey: subjects; brackets: Tukey HSD p",
-                 fontsize=8)
+    pairs = "brackets: Tukey HSD p" if brackets is not None else f"{len(pairwise)} pairs: Tukey HSD p in the pairwise table"
+    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects})\ngrey: subjects; {pairs}", fontsize=8)
     return fig
 
 
@@ -239,8 +252,13 @@ def _summary(r, args):
         lines.append(f"  ({r['note']})")
     lines += ["", "  pairwise: Tukey HSD (repeated-measures error term) and paired t-tests (Holm-corrected)",
               f"  {'A':<{width}}{'B':<{width}}{'diff':>10}{'q':>8}{'p Tukey':>10}{'t':>8}{'p Holm':>10}"]
-    for row in r["pairwise"]:
+    for row in r["pairwise"][:MAX_PRINTED_PAIRS]:
         lines.append(f"  {names[row['A']]:<{width}}{names[row['B']]:<{width}}{row['diff']:>10.4g}{row['q']:>8.3g}"
                      f"{row['p_tukey']:>10.4g}{row['t']:>8.3g}{row['p_holm']:>10.4g}")
+    if len(r["pairwise"]) > MAX_PRINTED_PAIRS:
+        lines.append(f"  ... the first {MAX_PRINTED_PAIRS} of {len(r['pairwise']):,} pairs; every pair is in "
+                     f"{r['outputs']['pairwise']}")
+    if "note_figure" in r:
+        lines += ["", f"  ({r['note_figure']})"]
     lines += ["", "wrote " + ", ".join(r["outputs"].values())]
     return "\n".join(lines)

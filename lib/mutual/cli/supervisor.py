@@ -60,12 +60,10 @@ example:
 
 def register(subparsers):
     """Add ``mutual supervisor`` and its ``fit`` command."""
-    import argparse
-    parser = subparsers.add_parser("supervisor", help="a supervisor's safe set from their interventions (chapter 4)",
-                                   description="Learn a supervisor's safe set from their interventions (chapter 4).")
-    commands = parser.add_subparsers(title="commands", dest="command", metavar="COMMAND", required=True)
-    fit = commands.add_parser("fit", help="fit w_max, mu, sigma and the avoidance level", description=DESCRIPTION,
-                              epilog=EXAMPLE, formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = common.command_group(subparsers, "supervisor",
+                                    "a supervisor's safe set from their interventions (chapter 4)",
+                                    "Learn a supervisor's safe set from their interventions (chapter 4).")
+    fit = common.add_command(commands, "fit", "fit w_max, mu, sigma and the avoidance level", DESCRIPTION, EXAMPLE)
     fit.add_argument("interventions", metavar="INTERVENTIONS.csv",
                      help="one row per intervention: participant, trial, time, x, y, theta[, obstacle_x, obstacle_y]")
     fit.add_argument("--grid", choices=sorted(GRIDS), default="full",
@@ -86,7 +84,6 @@ def register(subparsers):
     fit.add_argument("--speed", type=float, default=3.0, help="robot speed, units per second (default 3, eq. 5.1)")
     common.add_output_options(fit)
     fit.set_defaults(handler=run_fit, prog=fit.prog)
-    return parser
 
 
 def _w_maxes(text):
@@ -101,7 +98,7 @@ def _w_maxes(text):
 
 def _groups(frame, args, path):
     """``{participant: (n, 3) states}`` to fit."""
-    from ..supervision.supervisor import intervention_states
+    from ..supervision import intervention_states
     if args.pool:
         with common.about(path):
             return {"all": intervention_states(frame)}
@@ -139,7 +136,7 @@ def run_fit(args):
         frame = read_interventions(path)    # every column, every row, before any solve; names file, line, column
     half_width, shape, _ = GRIDS[args.grid]
     with common.about(path):
-        from ..supervision.supervisor import check_inside
+        from ..supervision import check_inside
         check_inside(frame, half_width, path)   # before any solve: names the line, in the file's coordinates
     groups = _groups(frame, args, path)
     w_maxes = _w_maxes(args.w_max)
@@ -175,7 +172,7 @@ def _figure(fits, args):
     import matplotlib.pyplot as plt
     import numpy as np
     from ..style import PALETTE
-    from ..supervision.dubins import rotate_to_heading
+    from ..supervision import rotate_to_heading
     shown = list(fits.items())[:12]
     cols = min(len(shown), 4)
     rows = -(-len(shown) // cols)

@@ -5,7 +5,7 @@
 reports (also through a dict bound to a name, ``**`` merges and a filtering dict comprehension),
 whether a value's expression is a *literal* (a constant, a name bound only to constants or to the
 parameters cell, or arithmetic and numpy/builtin conversions of those), and whether the notebook
-refers to a given library object. ``tests/test_claims_strict.py`` applies it to every notebook.
+refers to a given library object. ``tests/notebooks/test_claims.py`` applies it to every notebook.
 """
 
 import ast

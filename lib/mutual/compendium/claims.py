@@ -37,8 +37,7 @@ with the thesis lines that fix it (columns ``id``, ``chapter``, ``section``, ``l
 import math
 import re
 
-import pandas as pd
-
+from ..inputs import line_of, place, read_csv
 from . import paths
 
 COLUMNS = ["id", "chapter", "section", "lines", "statement", "thesis_value", "compare", "basis", "figure"]
@@ -56,14 +55,15 @@ _PASS = {"independent": "verified", "thesis-numbers": "consistent", "constructio
 
 
 def _read_table(path, columns, kind):
-    """A table of text cells with ``columns`` and unique ids, or a ValueError naming the file."""
-    df = pd.read_csv(path, dtype=str, keep_default_na=False)
-    missing = [c for c in columns if c not in df.columns]
-    if missing:
-        raise ValueError(f"{path}: missing columns {missing}")
-    dup = df["id"][df["id"].duplicated()].tolist()
-    if dup:
-        raise ValueError(f"{path}: duplicate {kind} ids {dup}")
+    """A table of text cells (empty ones "") with ``columns`` and unique ids, or a ValueError naming the file
+    and the line (:func:`mutual.inputs.read_csv`)."""
+    df = read_csv(path, columns).fillna("")
+    dup = df["id"].duplicated().to_numpy()
+    if dup.any():
+        again = df.index[dup][0]
+        first = df.index[(df["id"] == df["id"].loc[again]).to_numpy()][0]
+        raise ValueError(f"{place(df, again, 'id')}: the {kind} id {df['id'].loc[again]!r} appears again (first on "
+                         f"line {line_of(df, first)}); each {kind} needs its own id")
     return df
 
 

@@ -1,17 +1,17 @@
 """One notebook runner per output folder, and disk errors in one line.
 
 Two runners writing one output folder (say, a quick run and a run with other parameters) would mix
-their outputs: one run's results beside the other's figures. A runner therefore holds an exclusive
-``flock`` on the output folder itself while it works there, and a second runner on the same folder
-stops at once with one line naming the folder and the run that holds it (it does not wait: a run
-takes minutes, and the user should choose another ``--output`` or let the first finish). The lock
-belongs to the process: it is released when the runner ends, however it ends (even ``kill -9``),
-so a crashed run never blocks the next one. What the holding run is (pid, notebooks, parameters,
-start time) is written to ``running.json`` in its executed folder while it runs, for that message.
+their outputs: one run's results beside the other's figures. A runner therefore holds the folder's
+lock (:mod:`mutual.folder_lock`, the one every ``mutual`` command takes on its ``--out``) while it works
+there, and a second runner on the same folder stops at once with one line naming the folder and the
+run that holds it (it does not wait: a run takes minutes, and the user should choose another
+``--output`` or let the first finish). What the holding run is (pid, notebooks, parameters, start
+time) is written to ``running.json`` in its executed folder while it runs, for that message, and
+``runs.count`` beside it counts the runs that ever took the folder: :func:`writers` tells another run
+whether someone else may have written there meanwhile (see :mod:`.notebooks`).
 """
 
 import errno
-import fcntl
 import json
 import os
 import time
@@ -19,12 +19,16 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..atomic import write_text
+from ..folder_lock import FolderBusy, hold
+from .paths import BUILD
 from .runs import shown
 
-_HELD = {}   # resolved output folder -> open descriptor holding its lock (re-entrant within a process)
+#: where a full run (the only one that may write figures/ and data/) says it runs, with its count of runs beside
+#: it: a change to the committed files during another run is that run's own only when no full run wrote meanwhile
+COMMITTED_RUN = BUILD / "executed" / "running.json"
 
 
-class OutputBusy(RuntimeError):
+class OutputBusy(FolderBusy):
     """Another runner is writing to the output folder; the message names the folder and that run."""
 
 
@@ -69,25 +73,45 @@ def output_lock(folder, info, mode, notebooks, parameters):
     """Hold the output ``folder`` for this run (see the module); ``info`` is where the run says what it is.
     Raises :class:`OutputBusy` when another runner holds it. Re-entrant within one process."""
     folder = Path(folder).resolve()
-    if folder in _HELD:
-        yield
-        return
-    fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    busy = lambda: (f"another runner is writing to {shown(folder)} ({_holder(info)}); let it finish, or give "  # noqa: E731
+                    "this run another --output")
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        os.close(fd)
-        raise OutputBusy(f"another runner is writing to {shown(folder)} ({_holder(info)}); let it finish, or give "
-                         "this run another --output") from None
-    _HELD[folder] = fd
+        with hold(folder, busy):
+            _count(info)
+            write_text(info, json.dumps({"pid": os.getpid(), "mode": mode, "notebooks": [Path(n).name for n in notebooks],
+                                         "parameters": parameters, "started": time.time()}))
+            try:
+                yield
+            finally:
+                try:
+                    Path(info).unlink(missing_ok=True)
+                except OSError:
+                    pass
+    except FolderBusy as err:
+        if isinstance(err, OutputBusy):
+            raise
+        raise OutputBusy(str(err)) from None
+
+
+def _count(info):
+    path = Path(info).with_name("runs.count")
     try:
-        write_text(info, json.dumps({"pid": os.getpid(), "mode": mode, "notebooks": [Path(n).name for n in notebooks],
-                                     "parameters": parameters, "started": time.time()}))
-        yield
-    finally:
-        try:
-            Path(info).unlink(missing_ok=True)
-        except OSError:
-            pass
-        del _HELD[folder]
-        os.close(fd)
+        runs = int(path.read_text())
+    except (OSError, ValueError):
+        runs = 0
+    write_text(path, f"{runs + 1}\n")
+
+
+def writers(info):
+    """A token of the runs that took the folder whose runner writes ``info``: how many ever did, and the pid of
+    the one that holds it now (None). Equal tokens before and after a span of time: no such run wrote there."""
+    try:
+        runs = Path(info).with_name("runs.count").read_text().strip()
+    except OSError:
+        runs = "0"
+    try:
+        pid = json.loads(Path(info).read_text())["pid"]
+        os.kill(pid, 0)
+    except (OSError, ValueError, KeyError, TypeError):
+        pid = None
+    return runs, pid

@@ -35,7 +35,7 @@ import nbformat
 
 from ..atomic import write_text
 from . import paths as _paths
-from .lock import OutputBusy, check_output_folder, disk_error, output_lock
+from .lock import COMMITTED_RUN, OutputBusy, check_output_folder, disk_error, output_lock, writers
 from .numerics import portable_env
 from .paths import OUTPUT_ENV, executed_dir, figures_dir, generated_data_dir, is_committed, results_dir
 from .runs import kernel_env, run_mode, shown
@@ -106,7 +106,7 @@ def _cell_label(nb, index):
 
 def committed_files():
     """``{path: (mtime, size)}`` of the committed outputs (``figures/`` and ``data/``), to tell whether a
-    run that must not write them did."""
+    run that must not write them did (unless a full run wrote meanwhile: :func:`.lock.writers`)."""
     found = {}
     for folder in (_paths.FIGURES, _paths.DATA):
         for path in (folder.rglob("*") if folder.is_dir() else []):
@@ -279,7 +279,7 @@ def _execute(nb, path, parameters, timeout, env, mode):
         stale.unlink(missing_ok=True)
     kernel = {**os.environ, **KERNEL_ENV, **portable_env(), OUTPUT_ENV: str(figures_dir().resolve()),
               **kernel_env(path, parameters), **(env or {})}
-    guarded = None if is_committed() else committed_files()
+    guarded = None if is_committed() else (committed_files(), writers(COMMITTED_RUN))
     loop = ensure_event_loop()
     log_path = executed_dir() / f"{path.stem}.kernel.log"
     log_path.parent.mkdir(parents=True, exist_ok=True)
@@ -324,9 +324,9 @@ def _execute(nb, path, parameters, timeout, env, mode):
     if error:
         raise NotebookError(f"notebook {path.name} failed in {_cell_label(nb, run.cell)}: {error}{cleaned}")
     if guarded is not None:
-        after = committed_files()
-        touched = sorted(shown(f) for f in set(guarded) | set(after) if guarded.get(f) != after.get(f))
-        if touched:
+        (before, others), after = guarded, committed_files()
+        touched = sorted(shown(f) for f in set(before) | set(after) if before.get(f) != after.get(f))
+        if touched and others == writers(COMMITTED_RUN) and others[1] is None:   # no full run wrote meanwhile
             raise NotebookError(f"notebook {path.name} wrote the committed {', '.join(touched[:5])}"
                                 f"{' ...' if len(touched) > 5 else ''} in a {mode} run (outputs go to "
                                 f"{shown(figures_dir())}): write through figures_dir() and generated_data_dir()")

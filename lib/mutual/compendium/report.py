@@ -64,9 +64,10 @@ def extensions_table(folder=None):
     for path, doc in _documents(Path(folder or results_dir()) / "extensions", "extensions"):
         for key, e in doc["extensions"].items():
             rows.append({"notebook": doc["notebook"], "key": key, "measured": e["statement"], "value": _show(e["value"]),
-                         "simulated": "yes" if e["simulated"] else "no", "computed by": e["computed_by"],
-                         "note": e["note"]})
-    return pd.DataFrame(rows, columns=["notebook", "key", "measured", "value", "simulated", "computed by", "note"])
+                         "verdict": e.get("verdict", ""), "simulated": "yes" if e["simulated"] else "no",
+                         "computed by": e["computed_by"], "note": e["note"]})
+    return pd.DataFrame(rows, columns=["notebook", "key", "measured", "value", "verdict", "simulated", "computed by",
+                                       "note"])
 
 
 def _show(value):
@@ -92,6 +93,27 @@ def _scan_text(scan):
     return text + (f"; flips: {scan['flips']}" if scan.get("flips") else "")
 
 
+def _with_note(entry):
+    """A result's value followed by its note and the function that computed it."""
+    note = "; ".join(s for s in (entry.get("note", ""), entry.get("computed_by", "")) if s)
+    return _show(entry["value"]) + (f" ({note})" if note else "")
+
+
+def _reproduced(entry):
+    """The reproduced cell: our value and, where the number itself needs the study's data, the value of a
+    SIMULATED study beside it (it never decides the verdict)."""
+    if not entry:
+        return ""
+    beside = entry.get("beside")
+    return _with_note(entry) + (f"; beside it, SIMULATED: {_with_note(beside)}" if beside else "")
+
+
+def _simulated(entry):
+    if not entry:
+        return ""
+    return ("yes" if entry["simulated"] else "no") + ("; the value beside it: yes" if entry.get("beside") else "")
+
+
 def report_table(folder=None):
     """One row per claim: the thesis value, the reproduced value, the scan and the verdict."""
     claims = load_claims()
@@ -101,12 +123,11 @@ def report_table(folder=None):
         entry = results.get(claim["id"])
         got = entry["value"] if entry else None
         scan = entry.get("scan") if entry else None
-        note = "; ".join(s for s in (entry.get("note", ""), entry.get("computed_by", "")) if s) if entry else ""
         rows.append({"id": claim["id"], "chapter": int(claim["chapter"]), "section": claim["section"],
                      "lines": claim["lines"], "claim": claim["statement"], "thesis": claim["thesis_value"],
-                     "reproduced": _show(got) + (f" ({note})" if note else ""),
+                     "reproduced": _reproduced(entry),
                      "scan": _scan_text(scan), "verdict": verdict(claim, got, scan),
-                     "simulated inputs": ("yes" if entry["simulated"] else "no") if entry else "",
+                     "simulated inputs": _simulated(entry),
                      "figure": claim["figure"],
                      "run": (f"{entry['notebook']} ({entry['mode']})" if entry else "")})
     return pd.DataFrame(rows, columns=["id", "chapter", "section", "lines", "claim", "thesis", "reproduced", "scan",
@@ -160,7 +181,9 @@ INTRO = [
     "thesis does not state; the row says where), **differs** (the statement fails across the whole",
     "plausible range, with our numerics ruled out), **not reproducible without the original data**",
     "(the study's human data; a simulated value may stand beside it), **pending** (no notebook",
-    "reports it yet).",
+    "reports it yet). One number, one row: where a number of the study is checked from the thesis's own",
+    "numbers (consistent) but the number itself needs the study's data, the row says so and shows the value",
+    "of a SIMULATED study beside it, labelled; that value never decides the verdict.",
     "",
 ]
 
@@ -200,7 +223,8 @@ def build_report(folder=None):
         lines += ["", "## Extensions beyond the thesis", "",
                   "Numbers of experiments the thesis does not report (its closing cycle run end to end, replication",
                   "power, constraints from continuous demonstrations). They are not thesis claims and do not enter",
-                  "the verdict counts above.", "",
+                  "the verdict counts above. A verdict here judges a claim of another publication the thesis cites",
+                  "(its reference [67]), by the same rules, on our own set-up.", "",
                   "| " + " | ".join(extensions.columns) + " |", "|" + "---|" * len(extensions.columns)]
         lines += ["| " + " | ".join(_cell(v) for v in row) + " |" for row in extensions.itertuples(index=False)]
     return write_text(figures_dir() / "REPRODUCTION.md", "\n".join(lines) + "\n")

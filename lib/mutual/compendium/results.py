@@ -114,28 +114,46 @@ def _check_provenance(notebook, cid, entry):
         raise ValueError(f"notebook {notebook}, claim {cid!r}: {err}") from None
 
 
+def _beside(notebook, cid, basis, beside):
+    """The simulated value shown beside a row that is checked another way (:func:`write_results`)."""
+    if basis == "original-data":
+        raise ValueError(f"notebook {notebook}, claim {cid!r}: 'beside' is for a row checked another way (a thesis-numbers "
+                         "row whose number also needs the study's data); an original-data row's own value is the "
+                         "simulated one")
+    if not isinstance(beside, dict) or set(beside) != {"value", "computed_by", "note"}:
+        raise ValueError(f"notebook {notebook}, claim {cid!r}: 'beside' must be a dict with exactly 'value', "
+                         f"'computed_by' and 'note', got {beside!r}")
+    _check_provenance(notebook, f"{cid} (beside)", beside)
+    return {"value": _plain(beside["value"]), "note": str(beside["note"]), "computed_by": str(beside["computed_by"])}
+
+
 def write_results(notebook, claims, simulated=False):
     """Write ``<output folder>/results/<notebook>.json`` from ``{claim_id: entry}``.
 
     Each entry is a dict with ``value``, ``computed_by`` (the dotted name of the library function
     that computed the value, e.g. ``mutual.constraints.inference.greedy_inference``; the notebook
     calls it), ``note`` (the computation: what was compared, on what), optionally ``simulated``
-    (overriding the default for the whole notebook) and, for a ``computed`` claim, ``scan``: the
-    scan over what the thesis leaves open (:func:`mutual.compendium.claims.check_scan`). ``notebook`` is the notebook's file stem.
+    (overriding the default for the whole notebook), for a ``computed`` claim ``scan``: the
+    scan over what the thesis leaves open (:func:`mutual.compendium.claims.check_scan`), and
+    ``beside``: for a row whose verdict comes from another check (a number re-derived from the thesis's
+    own numbers) while the number itself needs the study's data, the value a SIMULATED study gives
+    (a dict of ``value``, ``computed_by`` and ``note``); it is shown beside the row, labelled, and never
+    decides its verdict (one number, one row). ``notebook`` is the notebook's file stem.
     Unknown claim ids and entries that do not name their computation raise a ValueError.
     """
-    known = set(load_claims()["id"])
+    claims_table = load_claims()
+    basis = dict(zip(claims_table["id"], claims_table["basis"]))
     entries = {}
     for cid, entry in sorted(claims.items()):
-        if cid not in known:
+        if cid not in basis:
             raise ValueError(f"claim id {cid!r} (from notebook {notebook!r}) is not in data/paper_claims.csv")
         if not isinstance(entry, dict):
             raise ValueError(f"notebook {notebook}, claim {cid!r}: the entry must be a dict with 'value', "
                              f"'computed_by' and 'note', got {entry!r}")
-        unknown = set(entry) - {"value", "simulated", "note", "computed_by", "scan"}
+        unknown = set(entry) - {"value", "simulated", "note", "computed_by", "scan", "beside"}
         if unknown or "value" not in entry:
             raise ValueError(f"notebook {notebook}, claim {cid!r}: entry needs 'value', 'computed_by' and 'note' "
-                             f"and may carry 'simulated' and 'scan', got {sorted(entry)}")
+                             f"and may carry 'simulated', 'scan' and 'beside', got {sorted(entry)}")
         _check_provenance(notebook, cid, entry)
         entries[cid] = {"value": _plain(entry["value"]),
                         "simulated": bool(entry.get("simulated", simulated)),
@@ -143,6 +161,8 @@ def write_results(notebook, claims, simulated=False):
                         "computed_by": str(entry["computed_by"])}
         if entry.get("scan") is not None:
             entries[cid]["scan"] = _plain_scan(cid, entry["scan"])
+        if entry.get("beside") is not None:
+            entries[cid]["beside"] = _beside(notebook, cid, basis[cid], entry["beside"])
     doc = {"notebook": notebook, "run": run_record(notebook), "claims": entries}
     return saved(write_text(results_dir() / f"{notebook}.json", json.dumps(doc, indent=1, sort_keys=True) + "\n"))
 
@@ -153,23 +173,27 @@ def write_extensions(notebook, results):
     never counted among the thesis's verdicts.
 
     ``results`` maps a short key to a dict with ``statement`` (what was measured), ``value``,
-    ``computed_by`` (the library function), and optionally ``note`` and ``simulated`` (default True).
+    ``computed_by`` (the library function), and optionally ``note``, ``simulated`` (default True) and,
+    for a claim of another publication checked here, its ``verdict`` by CLAIMS.md's rules.
     """
+    from .claims import VERDICTS
     entries = {}
     for key, entry in sorted(results.items()):
         entry = dict(entry)
         missing = {"statement", "value", "computed_by"} - set(entry)
-        unknown = set(entry) - {"statement", "value", "computed_by", "note", "simulated"}
+        unknown = set(entry) - {"statement", "value", "computed_by", "note", "simulated", "verdict"}
         if missing or unknown:
             raise ValueError(f"extension result {key!r}: needs 'statement', 'value' and 'computed_by' and may carry "
-                             f"'note' and 'simulated' (missing {sorted(missing)}, unknown {sorted(unknown)})")
+                             f"'note', 'simulated' and 'verdict' (missing {sorted(missing)}, unknown {sorted(unknown)})")
+        if entry.get("verdict", VERDICTS[0]) not in VERDICTS:
+            raise ValueError(f"extension result {key!r}: verdict {entry['verdict']!r} is not one of {list(VERDICTS)}")
         try:
             resolve_computed_by(entry["computed_by"])
         except ValueError as err:
             raise ValueError(f"notebook {notebook}, extension result {key!r}: {err}") from None
         entries[key] = {"statement": str(entry["statement"]), "value": _plain(entry["value"]),
                         "computed_by": str(entry["computed_by"]), "note": str(entry.get("note", "")),
-                        "simulated": bool(entry.get("simulated", True))}
+                        "simulated": bool(entry.get("simulated", True)), "verdict": str(entry.get("verdict", ""))}
     doc = {"notebook": notebook, "run": run_record(notebook), "extensions": entries}
     text = json.dumps(doc, indent=1, sort_keys=True) + "\n"
     return saved(write_text(results_dir() / "extensions" / f"{notebook}.json", text))

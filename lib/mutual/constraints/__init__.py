@@ -8,15 +8,28 @@ pruning bound of :mod:`.bounds`). The same from continuous demonstrations -- an 
 3.4's next step -- is the subpackage :mod:`.continuous`.
 """
 
-from .backup import log_partition, rank_candidates, value_ratio
-from .candidates import Candidates, constraint_candidates
-from .chance import constraint_mask, max_likelihood_thresholds
-from .demonstrations import Demonstrations, load_demonstrations, sample_demonstrations, write_demonstrations
-from .gridworld import Gridworld, gridworld
-from .inference import InferenceResult, greedy_inference
-from .mdp import MDP, soft_bellman_backup, soft_policy
+from ..lazy import lazy_names
+from .backup import (algorithm_agreement, log_partition, log_partition_literal, rank_candidates,
+                     state_action_visitation, value_ratio)
+from .candidates import Candidates, as_tasks, constraint_candidates
+from .chance import constraint_mask, lemma_321_exact, max_likelihood_thresholds, psi_star_by_loop
+from .demonstrations import (Demonstrations, load_demonstrations, sample_demonstrations, sample_trajectories,
+                             write_demonstrations)
+from .gridworld import GRID_ACTIONS, Gridworld, gridworld
+from .inference import InferenceResult, greedy_inference, score_candidates
+from .mdp import MDP, check_mask, expected_next, masked_logsumexp, soft_bellman_backup, soft_policy
 
-__all__ = ["MDP", "Candidates", "Demonstrations", "Gridworld", "InferenceResult", "constraint_candidates",
-           "constraint_mask", "greedy_inference", "gridworld", "load_demonstrations", "log_partition",
-           "max_likelihood_thresholds", "rank_candidates", "sample_demonstrations", "soft_bellman_backup",
-           "soft_policy", "value_ratio", "write_demonstrations"]
+__all__ = ["GRID_ACTIONS", "MDP", "Candidates", "Demonstrations", "Gridworld", "InferenceResult",
+           "algorithm_agreement", "as_tasks", "causal_versus_noncausal", "check_mask", "constraint_candidates",
+           "constraint_mask", "controller_check", "expected_next", "gradient_check", "greedy_bound_survey",
+           "greedy_inference", "gridworld", "gridworld_ranking_work", "lemma_321_exact", "load_demonstrations",
+           "load_world", "log_partition", "log_partition_literal", "masked_logsumexp", "max_likelihood_thresholds",
+           "plot_actions", "plot_states", "printed_gradient_check", "psi_star_by_loop", "rank_candidates",
+           "sample_demonstrations", "sample_trajectories", "score_candidates", "soft_bellman_backup", "soft_policy",
+           "state_action_visitation", "value_ratio", "write_demonstrations"]
+
+# the world file, the figures and the independent checks of chapters 2-3, imported on first use
+__getattr__ = lazy_names(__name__, {
+    "load_world": "world", "plot_states": "plots", "plot_actions": "plots",
+    "causal_versus_noncausal": "noncausal", "controller_check": "controllers", "gradient_check": "gradient",
+    "printed_gradient_check": "gradient", "greedy_bound_survey": "subsets", "gridworld_ranking_work": "complexity"})

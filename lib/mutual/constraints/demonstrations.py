@@ -11,8 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .. import budget
 from ..atomic import atomic_path
-from ..csvfile import check_header
+from ..inputs import number_column, place, read_csv
 from ..seeds import generator
 from .mdp import MDP, check_mask, soft_policy
 
@@ -92,32 +93,41 @@ def check_demonstrations(mdp, demos):
     return demos
 
 
-def sample_demonstrations(mdp, n, mask=None, rng=None):
+def sample_demonstrations(mdp, n, mask=None, rng=None, allow_large=None):
     """Sample ``n`` trajectories of T steps from the constrained Boltzmann policy (eq. 2.19).
 
-    Starts are drawn from ``mdp.initial``; ``rng`` is a seed or numpy Generator.
+    Starts are drawn from ``mdp.initial``; ``rng`` is a seed or numpy Generator; ``allow_large`` as
+    :func:`mutual.budget.check` (``n`` trajectories are held in memory).
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n: must be a positive integer, got {n!r}")
     if not isinstance(mdp, MDP):
         raise TypeError(f"mdp: must be an MDP, got {type(mdp).__name__}")
+    budget.check(budget.demonstrations(n, mdp.horizon), allow_large)
     rng = generator(rng, "rng")
     pi = soft_policy(mdp, check_mask(mdp, mask))
     if np.any(pi[0].sum(axis=1)[mdp.initial > 0] == 0):
         raise ValueError("mask: no trajectory from some initial state satisfies the constraints (V = -inf)")
+    return sample_trajectories(mdp, pi, n, rng)
+
+
+def sample_trajectories(mdp, policy, n, rng):
+    """``n`` trajectories of T steps of ``policy`` (T, X, A) from ``mdp.initial`` (``rng``: a Generator): the
+    start, then at each step every trajectory's action and next state, each one :func:`categorical` draw."""
     T, X, A = mdp.horizon, mdp.n_states, mdp.n_actions
     states = np.empty((n, T + 1), dtype=np.int64)
     actions = np.empty((n, T), dtype=np.int64)
-    states[:, 0] = _draw(np.broadcast_to(mdp.initial, (n, X)), rng)
+    states[:, 0] = categorical(np.broadcast_to(mdp.initial, (n, X)), rng)
     for t in range(T):
-        actions[:, t] = _draw(pi[t, states[:, t]], rng)
+        actions[:, t] = categorical(policy[t, states[:, t]], rng)
         rows = mdp.transitions[states[:, t] * A + actions[:, t]]
-        states[:, t + 1] = _draw(rows.toarray() if mdp.is_sparse else rows, rng)
+        states[:, t + 1] = categorical(rows.toarray() if mdp.is_sparse else rows, rng)
     return Demonstrations(states, actions)
 
 
-def _draw(probs, rng):
-    """One categorical draw per row of ``probs`` (rows sum to 1)."""
+def categorical(probs, rng):
+    """One draw per row of ``probs`` by inverting its cumulative sum with one uniform number per row (rows
+    summing to 1; an all-zero row gives the last index)."""
     cdf = np.cumsum(probs, axis=1)
     u = rng.random(probs.shape[0]) * cdf[:, -1]
     return np.minimum((cdf <= u[:, None]).sum(axis=1), probs.shape[1] - 1)
@@ -152,22 +162,14 @@ def write_demonstrations(path, demos):
     return path
 
 
-def _integers(df, column, path, allow_empty=False):
-    """Column ``column`` as float values (nan where empty), refusing text and fractions with
-    a ValueError naming the file, the line and the column."""
-    raw = df[column].str.strip()
-    values = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
-    bad = (np.isnan(values) & (raw.fillna("") != "")) | (np.isfinite(values) & (np.mod(values, 1) != 0))
-    bad |= np.isinf(values)
-    if not allow_empty:
-        bad |= raw.fillna("") == ""
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"{path}, line {i + 2}, column {column!r}: {df[column].iloc[i]!r} is not an integer")
-    huge = np.abs(np.nan_to_num(values)) > 2 ** 53     # beyond exact floats (and any index): never wrap around
+def _integers(frame, column, allow_empty=False):
+    """Column ``column`` as float values (nan where empty), refusing text, fractions and integers beyond 2^53
+    (beyond exact floats and any index: never wrap around) with a ValueError naming the file, line and column."""
+    values = number_column(frame, column, allow_empty, whole=True, what="an integer")
+    huge = np.abs(np.nan_to_num(values)) > 2 ** 53
     if huge.any():
-        i = int(np.flatnonzero(huge)[0])
-        raise ValueError(f"{path}, line {i + 2}, column {column!r}: {df[column].iloc[i]!r} is too large "
+        label = frame.index[int(np.flatnonzero(huge)[0])]
+        raise ValueError(f"{place(frame, label, column)}: {frame[column].loc[label]!r} is too large "
                          f"(|{column}| <= 2^53)")
     return values
 
@@ -186,19 +188,9 @@ def load_demonstrations(path, mdp):
     action the state does not offer, a transition with zero probability under S -- raises
     a ValueError naming the file, the line (1 = the header) and the column.
     """
-    check_header(path)          # a duplicated column (pandas would rename it 'state.1') or another delimiter
-    try:
-        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_values=[""], encoding="utf-8-sig")
-    except pd.errors.EmptyDataError:
-        raise ValueError(f"{path}: the file is empty; expected a header {','.join(DEMONSTRATION_COLUMNS)} "
-                         "and one row per time step") from None
-    missing = [c for c in DEMONSTRATION_COLUMNS if c not in df.columns]
-    if missing:
-        raise ValueError(f"{path}, line 1: missing columns {missing}; expected {list(DEMONSTRATION_COLUMNS)}")
-    if df.empty:
-        raise ValueError(f"{path}: no rows after the header; expected one row per time step")
-    values = {c: _integers(df, c, path, allow_empty=(c == "action")) for c in DEMONSTRATION_COLUMNS}
-    line = np.arange(len(df)) + 2
+    frame = read_csv(path, DEMONSTRATION_COLUMNS)       # names the file and line of every malformed row
+    values = {c: _integers(frame, c, allow_empty=(c == "action")) for c in DEMONSTRATION_COLUMNS}
+    line = np.asarray(frame.attrs["lines"])
     order = np.lexsort((values["t"], values["demo"]))
     demo, t, state, action, line = (a[order] for a in (values["demo"], values["t"], values["state"],
                                                         values["action"], line))

@@ -1,8 +1,8 @@
 """Explore chapters 2-3 (the notebooks' ``## Explore`` sections): plain functions of the
 experiment's key parameters that return a ``matplotlib.figure.Figure``, for ipywidgets to call.
 
-Each function reruns the chapter 3 experiment (:mod:`.experiment`, first layout, the thesis's
-set-up) on simulated demonstrations with the given number of demonstrations and slip; runs are
+Each function reruns the chapter 3 experiment (:mod:`.experiment`, the chosen layout "four", the
+thesis's set-up) on simulated demonstrations with the given number of demonstrations and slip; runs are
 cached, so moving a control back answers at once, and :func:`precompute` fills the cache for the
 notebook's slider values.
 """
@@ -25,7 +25,7 @@ ROUNDS = 8
 
 
 @lru_cache(maxsize=64)
-def inference_run(n_demos=100, slip=0.1, rounds=ROUNDS, layout="first", seed=SEED):
+def inference_run(n_demos=100, slip=0.1, rounds=ROUNDS, layout="four", seed=SEED):
     """(set-up, demonstrations, candidates, greedy result ranked by F) of the chapter 3
     experiment with ``n_demos`` simulated demonstrations and ``slip`` (cached)."""
     if isinstance(n_demos, bool) or not isinstance(n_demos, (int, np.integer)) or n_demos < 1:

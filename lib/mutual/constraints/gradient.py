@@ -7,7 +7,8 @@ pass computes (:func:`mutual.constraints.backup.expected_features`). Eq. (2.8) p
 the demonstrations' counts minus *one* expectation; per demonstration (Ziebart's eq. 5, which the
 thesis follows) the two sides match, summed over |D| demonstrations the expectation counts |D|
 times. :func:`gradient_check` compares the per-demonstration form with central differences of the
-exact log-likelihood (eq. 2.19, :func:`~mutual.constraints.demonstrations.demonstration_log_likelihood`).
+exact log-likelihood (eq. 2.19, :func:`~mutual.constraints.demonstrations.demonstration_log_likelihood`);
+:func:`printed_gradient_check` compares the printed form with the differences of the likelihood of all of D.
 """
 
 from dataclasses import replace
@@ -67,3 +68,13 @@ def gradient_check(mdp, features, theta, demos, mask=None, step=1e-5):
                       - mean_log_likelihood(mdp, phi, th - e, demos, mask)) / (2 * step)
     analytic = feature_gradient(mdp, phi, th, demos, mask)
     return analytic, numeric, float(np.max(np.abs(analytic - numeric)))
+
+
+def printed_gradient_check(mdp, features, theta, demos, mask=None, step=1e-5):
+    """Eq. (2.8) as printed, sum over D of f(xi) minus one expectation E f, against central differences of the
+    log-likelihood of all of D (|D| times :func:`mean_log_likelihood`): ``(printed, numeric, max |gap|)``. The
+    gap is (|D| - 1) E f when the per-demonstration form holds."""
+    analytic, numeric, _ = gradient_check(mdp, features, theta, demos, mask, step)
+    expected = expected_features(reward_model(mdp, features, theta), _features(mdp, features), mask)
+    printed = demos.n * (analytic + expected) - expected
+    return printed, demos.n * numeric, float(np.max(np.abs(printed - demos.n * numeric)))

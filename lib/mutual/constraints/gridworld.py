@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..inputs import check_number
 from .mdp import MAX_VALUE, MDP
 
 MAX_BYTES = 4 * 2 ** 30   # the memory one world may ask for (dense S and the soft policy): 4 GiB
@@ -46,12 +47,6 @@ class Gridworld:
         if kind == "state":
             return "state ({}, {})".format(*(int(v) for v in self.coords(index)))
         return f"action {GRID_ACTIONS[index]}"
-
-
-def _integer(name, v, low):
-    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
-        raise ValueError(f"{name}: must be an integer >= {low}, got {v!r}")
-    return int(v)
 
 
 def _cell(name, value, width, height):
@@ -116,7 +111,8 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
     demonstrator (eq. 2.19), which the thesis does not state (1: unit temperature).
     The agent starts at ``start``; positions are (col, row), row 0 at the bottom.
     """
-    width, height = _integer("width", width, 2), _integer("height", height, 2)
+    width, height = (check_number(name, v, low=2, integer=True, sep=": ") for name, v in (("width", width),
+                                                                                       ("height", height)))
     start, goal = _cell("start", start, width, height), _cell("goal", goal, width, height)
     if isinstance(slip, bool) or not isinstance(slip, numbers.Real) or not 0 <= slip <= 1:
         raise ValueError(f"slip: must be a number in [0, 1], got {slip!r}")
@@ -131,7 +127,8 @@ def gridworld(width, height, start, goal, slip=0.1, horizon=None, miss_penalty=5
                          f"got {reward_scale!r}")
     if loiter not in LOITER_RULES:
         raise ValueError(f"loiter: must be one of {LOITER_RULES}, got {loiter!r}")
-    horizon = 2 * max(width, height) if horizon is None else _integer("horizon", horizon, 1)
+    horizon = 2 * max(width, height) if horizon is None else check_number("horizon", horizon, low=1, integer=True,
+                                                                           sep=": ")
     if miss_penalty > miss_penalty_limit(horizon):
         raise ValueError(f"miss_penalty: {miss_penalty:g} is too large (at most {miss_penalty_limit(horizon):.3g}: "
                          "soft values this large lose every digit of the policy)")

@@ -18,9 +18,7 @@ States are numbered ``col + width * row``; actions follow
 :data:`mutual.constraints.gridworld.GRID_ACTIONS` (E, NE, N, NW, W, SW, S, SE, loiter = 0..8).
 """
 
-import math
-
-from ..tomlfile import read_toml
+from ..inputs import Keys, read_toml
 from .gridworld import gridworld, miss_penalty_limit, size_problem
 
 LOITER_RULES = ("goal", "anywhere")
@@ -28,35 +26,15 @@ _KEYS = ("width", "height", "start", "goal", "slip", "horizon", "miss_penalty", 
 _REQUIRED = ("width", "height", "start", "goal", "slip")
 
 
-def _fail(source, key, reason):
-    raise ValueError(f"{source}: key {key!r}: {reason}")
-
-
-def _integer(d, key, source, low):
-    v = d[key]
-    if isinstance(v, bool) or not isinstance(v, int) or v < low:
-        _fail(source, key, f"must be an integer >= {low}, got {v!r}")
-    return v
-
-
-def _cell(d, key, source, width, height):
-    v = d[key]
+def _cell(keys, key, width, height):
+    v = keys.get(key)
     if (not isinstance(v, list) or len(v) != 2
             or not all(isinstance(c, int) and not isinstance(c, bool) for c in v)):
-        _fail(source, key, f"must be [col, row], two integers, got {v!r}")
+        keys.fail(key, f"must be [col, row], two integers, got {v!r}")
     col, row = v
     if not (0 <= col < width and 0 <= row < height):
-        _fail(source, key, f"[{col}, {row}] is off the {width} x {height} grid (col 0..{width - 1}, "
-                           f"row 0..{height - 1})")
+        keys.fail(key, f"[{col}, {row}] is off the {width} x {height} grid (col 0..{width - 1}, row 0..{height - 1})")
     return (col, row)
-
-
-def _real(d, key, source, low, high=math.inf):
-    v = d[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not low <= v <= high:
-        span = f"in [{low:g}, {high:g}]" if math.isfinite(high) else f">= {low:g}"
-        _fail(source, key, f"must be a number {span}, got {v!r}")
-    return float(v)
 
 
 def world_from_mapping(mapping, source="world"):
@@ -64,31 +42,22 @@ def world_from_mapping(mapping, source="world"):
 
     Raises ValueError naming ``source`` and the key for a missing, unknown or out-of-range key.
     """
-    if not isinstance(mapping, dict):
-        raise ValueError(f"{source}: must be a table of keys, got {type(mapping).__name__}")
-    unknown = sorted(set(mapping) - set(_KEYS))
-    if unknown:
-        _fail(source, unknown[0], f"unknown key (known: {', '.join(_KEYS)})")
-    for key in _REQUIRED:
-        if key not in mapping:
-            _fail(source, key, "missing (required)")
-    width = _integer(mapping, "width", source, 2)
-    height = _integer(mapping, "height", source, 2)
-    start = _cell(mapping, "start", source, width, height)
-    goal = _cell(mapping, "goal", source, width, height)
-    slip = _real(mapping, "slip", source, 0.0, 1.0)
-    horizon = _integer(mapping, "horizon", source, 1) if "horizon" in mapping else None
-    miss_penalty = _real(mapping, "miss_penalty", source, 0.0) if "miss_penalty" in mapping else 50.0
-    loiter = mapping.get("loiter", "goal")
-    if loiter not in LOITER_RULES:
-        _fail(source, "loiter", f"must be one of {list(LOITER_RULES)}, got {loiter!r}")
+    keys = Keys(mapping, source).known(_KEYS, _REQUIRED)
+    width = keys.number("width", low=2, integer=True)
+    height = keys.number("height", low=2, integer=True)
+    start = _cell(keys, "start", width, height)
+    goal = _cell(keys, "goal", width, height)
+    slip = keys.number("slip", 0.0, 1.0)
+    horizon = keys.number("horizon", low=1, integer=True, default=None)
+    miss_penalty = keys.number("miss_penalty", low=0.0, default=50.0)
+    loiter = keys.choice("loiter", LOITER_RULES, default="goal")
     steps = horizon if horizon is not None else 2 * max(width, height)
     problem = size_problem(width, height, steps)     # before anything is allocated
     if problem:
-        _fail(source, problem[0] if problem[0] != "horizon" or horizon is not None else "width", problem[1])
+        keys.fail(problem[0] if problem[0] != "horizon" or horizon is not None else "width", problem[1])
     if miss_penalty > miss_penalty_limit(steps):
-        _fail(source, "miss_penalty", f"{miss_penalty:g} is too large (at most {miss_penalty_limit(steps):.3g}: soft "
-                                      "values this large lose every digit of the policy)")
+        keys.fail("miss_penalty", f"{miss_penalty:g} is too large (at most {miss_penalty_limit(steps):.3g}: soft values "
+                                  "this large lose every digit of the policy)")
     return gridworld(width, height, start, goal, slip=slip, horizon=horizon, miss_penalty=miss_penalty,
                      loiter=loiter)
 

@@ -12,7 +12,7 @@ time by the Laplace approximation (:mod:`.laplace`). Intervals in :mod:`.interva
 """
 
 from .discrete import alpha_sweep, blind_spot_study, compare_robots, legible_robots, observer_study
-from .evidence import SafeSetTask, solve_path
+from .evidence import SafeSetTask, evidence_study, solve_path
 from .laplace import posterior_over_time, prefix_log_likelihoods
 from .learning import ConstraintSet, pooled_inference, relevance, sample_efficiency, stop_threshold
 from .mdp_legibility import legibility_weights, legible_backup, legible_objective
@@ -21,7 +21,7 @@ from .outcomes import policy_outcomes, sample_rollouts
 from .supervision import closed_form_library, false_positive_study, learned_false_positives
 
 __all__ = ["ConstraintSet", "SafeSetTask", "alpha_sweep", "blind_spot_study", "closed_form_library",
-           "compare_robots", "expected_log_odds", "false_positive_study", "learned_false_positives",
+           "compare_robots", "evidence_study", "expected_log_odds", "false_positive_study", "learned_false_positives",
            "legibility_weights", "legible_backup", "legible_objective", "legible_robots", "observer_study",
            "policy_outcomes", "pooled_inference", "posterior_over_time", "posterior_paths",
            "prefix_log_likelihoods", "relevance", "sample_efficiency", "sample_rollouts", "solve_path",

@@ -11,8 +11,7 @@ import pandas as pd
 from scipy import stats
 from scipy.special import expit, logit
 
-from ..constraints.demonstrations import sample_demonstrations
-from ..constraints.mdp import soft_policy
+from ..constraints import sample_demonstrations, soft_policy
 from .learning import pooled_inference, scores
 from .mdp_legibility import legibility_weights, legible_backup
 from .observer import expected_log_odds, log_odds_paths, step_log_ratio, time_to_confidence

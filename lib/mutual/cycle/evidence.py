@@ -22,7 +22,7 @@ from scipy import stats
 
 from ..dubins import SPEED, TRUE_W_MAX, step_jax
 from ..dubins import avoid_value_jax as avoid_value  # the closed form in JAX, kinks rounded
-from ..supervision.dubins import avoid_value_closed_form
+from ..supervision import avoid_value_closed_form
 from .laplace import best_tail, posterior_over_time, prefix_log_likelihoods
 
 

@@ -6,13 +6,9 @@ from functools import lru_cache
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..constraints.backup import state_action_visitation
-from ..constraints.demonstrations import sample_demonstrations
-from ..constraints.gridworld import GRID_ACTIONS, gridworld
-from ..constraints.plots import plot_states
+from ..constraints import GRID_ACTIONS, gridworld, plot_states, sample_demonstrations, state_action_visitation
 from ..style import PALETTE
-from ..supervision.fit import fit_supervisor
-from ..supervision.supervisor import NoisySupervisor
+from ..supervision import NoisySupervisor, fit_supervisor
 from .discrete import legible_robots
 from .learning import ConstraintSet, pooled_inference
 from .observer import expected_log_odds, step_log_ratio

@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..motion.trajopt import ILQRError, ilqr
+from ..motion import ILQRError, ilqr
 
 
 @lru_cache(maxsize=64)

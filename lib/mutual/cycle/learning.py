@@ -17,11 +17,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..constraints.chance import constraint_mask
-from ..constraints.candidates import as_tasks
-from ..constraints.demonstrations import Demonstrations, sample_demonstrations
-from ..constraints.inference import constraint_candidates, score_candidates
-from ..constraints.mdp import check_mask, soft_policy
+from ..constraints import (Demonstrations, as_tasks, check_mask, constraint_candidates, constraint_mask,
+                           sample_demonstrations, score_candidates, soft_policy)
 from .outcomes import policy_outcomes
 
 

@@ -28,7 +28,7 @@ legible robot heads for states from which even an unconstrained agent would comp
 
 import numpy as np
 
-from ..constraints.mdp import check_mask, expected_next, masked_logsumexp
+from ..constraints import check_mask, expected_next, masked_logsumexp
 from .outcomes import check_policy
 
 WEIGHTS = ("final", "anticipatory")

@@ -17,7 +17,7 @@ An action that C1 forbids gives l = -inf: the observer then knows for certain th
 import numpy as np
 from scipy.special import expit, logit
 
-from ..constraints.mdp import check_mask, soft_policy
+from ..constraints import check_mask, soft_policy
 from .outcomes import check_policy
 
 

@@ -9,8 +9,7 @@ eq. (2.19) from :func:`mutual.constraints.mdp.soft_policy`. The forward pass is 
 
 import numpy as np
 
-from ..constraints.demonstrations import Demonstrations
-from ..constraints.mdp import check_mask
+from ..constraints import check_mask, sample_trajectories
 
 
 _ROUNDING = 1e-12  # a probability below this is the sums' rounding (e.g. 1 - 0.9999999999999999) and reported as 0
@@ -80,31 +79,14 @@ def policy_outcomes(mdp, policy, allowed=None, forbidden_states=()):
 
 def sample_rollouts(mdp, policy, n, rng=None):
     """``n`` trajectories of T steps of ``policy`` (T, X, A) from ``mdp.initial``, as
-    :class:`mutual.constraints.demonstrations.Demonstrations` (``rng``: seed or Generator).
+    :class:`mutual.constraints.Demonstrations` (``rng``: seed or Generator).
 
-    Rows of a dead state (all-zero policy) fall back to action 0; use policies that keep every
+    Rows of a dead state (all-zero policy) fall back to the last action; use policies that keep every
     reachable state alive (e.g. the soft policy of a feasible constraint set).
     """
     if not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n: must be a positive integer, got {n!r}")
-    pi = check_policy(mdp, policy)
-    rng = np.random.default_rng(rng)
-    T, A = mdp.horizon, mdp.n_actions
-    states = np.empty((n, T + 1), dtype=np.int64)
-    actions = np.empty((n, T), dtype=np.int64)
-    states[:, 0] = _categorical(np.broadcast_to(mdp.initial, (n, mdp.n_states)), rng)
-    for t in range(T):
-        actions[:, t] = _categorical(pi[t, states[:, t]], rng)
-        rows = mdp.transitions[states[:, t] * A + actions[:, t]]
-        states[:, t + 1] = _categorical(rows.toarray() if mdp.is_sparse else rows, rng)
-    return Demonstrations(states, actions)
-
-
-def _categorical(probs, rng):
-    """One draw per row of ``probs`` (rows summing to 1; an all-zero row gives 0)."""
-    cdf = np.cumsum(probs, axis=1)
-    u = rng.random(probs.shape[0]) * cdf[:, -1]
-    return np.minimum((cdf <= u[:, None]).sum(axis=1), probs.shape[1] - 1)
+    return sample_trajectories(mdp, check_policy(mdp, policy), n, np.random.default_rng(rng))
 
 
 def rollout_outcomes(mdp, rollouts, allowed=None, forbidden_states=()):

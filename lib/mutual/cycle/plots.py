@@ -5,10 +5,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, FancyArrowPatch
 
-from ..constraints.gridworld import GRID_ACTIONS
-from ..constraints.plots import plot_states
+from ..constraints import GRID_ACTIONS, plot_states
 from ..style import PALETTE
-from ..supervision.dubins import avoid_value_closed_form, rotate_to_heading
+from ..supervision import avoid_value_closed_form, rotate_to_heading
 
 ROBOT_COLOURS = {"plain": "#8c8c8c", "legible": PALETTE["green"], "H0": PALETTE["black"], "H1": "#8c8c8c"}
 

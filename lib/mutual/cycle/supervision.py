@@ -13,11 +13,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..supervision.control import filter_control
-from ..supervision.dubins import SPEED, TRUE_W_MAX, dubins_step
-from ..supervision.fit import fit_supervisor
-from ..supervision.reachability import FULL_GRID, GridSpec, avoid_value_function, value_library
-from ..supervision.supervisor import approach_scenes
+from ..supervision import (FULL_GRID, SPEED, TRUE_W_MAX, GridSpec, approach_scenes, avoid_value_function, dubins_step,
+                           filter_control, fit_supervisor, value_library)
 from .intervals import mean_interval
 
 

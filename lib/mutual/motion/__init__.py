@@ -17,22 +17,19 @@ and what both chapters use:
   :mod:`.animation` -- the belief animations of both chapters.
 """
 
+from ..lazy import lazy_names
 from .legible import (LinearDynamics, QuadraticCost, legible_trajectory, reaching_cost, receding_horizon,
                       single_integrator, solve_lq)
 from .observer import log_likelihood_ratio, posterior_over_time
 
-__all__ = ["ILQRResult", "LinearDynamics", "QuadraticCost", "ilqr", "legible_trajectory", "log_likelihood_ratio",
-           "multi_distractor_qp", "posterior_over_time", "reaching_cost", "receding_horizon", "single_integrator",
-           "solve_lq"]
+__all__ = ["ILQRError", "ILQRResult", "LinearDynamics", "QuadraticCost", "dubins_step", "ilqr", "laplace_gaussian",
+           "legible_trajectory", "load_legible_spec", "log_likelihood_ratio", "multi_distractor_qp",
+           "posterior_over_time", "reaching_cost", "receding_horizon", "single_integrator", "solve_legible", "solve_lq"]
 
-
-def __getattr__(name):
-    """iLQR loads JAX and the QP cvxpy: both are imported on first use, so that the LQ path (chapter 6's
-    solvers and observer, ``mutual motion legible`` on the single integrator) starts in NumPy alone."""
-    if name in ("ILQRResult", "ilqr"):
-        from . import trajopt
-        return getattr(trajopt, name)
-    if name == "multi_distractor_qp":
-        from .legible.qp import multi_distractor_qp
-        return multi_distractor_qp
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# iLQR, the Dubins car and the Laplace belief load JAX and the QP cvxpy: they are imported on first use, so
+# that the LQ path (chapter 6's solvers and observer, ``mutual motion legible`` on the single integrator)
+# starts in NumPy alone
+__getattr__ = lazy_names(__name__, {
+    "ILQRError": "trajopt", "ILQRResult": "trajopt", "ilqr": "trajopt", "multi_distractor_qp": "legible.qp",
+    "dubins_step": "evident.vehicles", "laplace_gaussian": "belief", "load_legible_spec": "spec",
+    "solve_legible": "spec"})

@@ -135,15 +135,20 @@ def posterior_over_time(dynamics, costs, x0, us, prior=None):
     costs = list(costs)
     if len(costs) < 2:
         raise ValueError(f"costs must list at least two hypotheses, got {len(costs)}")
+    us = _check_controls(dynamics, us)
+    return posterior_from_chains(lq_chains(dynamics, costs, x0, len(us)), us, prior)
+
+
+def posterior_from_chains(chains, us, prior=None):
+    """:func:`posterior_over_time` from the hypotheses' Gaussians (:func:`mutual.motion.chain.lq_chains`),
+    computed once for many motions of the same problem."""
     if prior is None:
-        log_prior = np.full(len(costs), -np.log(len(costs)))
+        log_prior = np.full(len(chains), -np.log(len(chains)))
     else:
         p = np.asarray(prior, float)
-        if p.shape != (len(costs),) or not np.all(np.isfinite(p)) or np.any(p <= 0):
-            raise ValueError(f"prior must be {len(costs)} positive probabilities, got {prior!r}")
+        if p.shape != (len(chains),) or not np.all(np.isfinite(p)) or np.any(p <= 0):
+            raise ValueError(f"prior must be {len(chains)} positive probabilities, got {prior!r}")
         log_prior = np.log(p / p.sum())
-    us = _check_controls(dynamics, us)
-    chains = lq_chains(dynamics, costs, x0, len(us))
     logs = np.stack([-log_ratio_prefix(us, chains[0], g) for g in chains], axis=1) + log_prior  # log P_i - log P_0
     top = logs.max(axis=1, keepdims=True)
     return np.exp(logs - top - np.log(np.exp(logs - top).sum(axis=1, keepdims=True)))      # log-sum-exp

@@ -38,7 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..tomlfile import read_toml
+from .. import budget
+from ..inputs import Keys, read_toml, shown
 
 DYNAMICS = ("single-integrator", "dubins")
 _KEYS = {"dynamics", "start", "goal", "distractors", "horizon", "steps", "alpha", "eta", "terminal_weight",
@@ -88,163 +89,115 @@ class LegibleSpec:
         return "lqr" if self.anticipation is None else "receding-horizon"
 
 
-def _fail(source, key, reason):
-    raise ValueError(f"{source}: key {key!r}: {reason}")
-
-
-def _shown(v):
-    text = repr(v)
-    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
-
-
-def _finite_number(v):
-    """Is ``v`` a finite real number (not a bool)? An int too large for a float is not."""
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return False
-    try:
-        return math.isfinite(v)
-    except OverflowError:
-        return False
-
-
-def _number(d, key, source, default=None, positive=False, prefix=""):
-    if key not in d:
-        if default is None:
-            _fail(source, prefix + key, "missing (required)")
-        return float(default)
-    v = d[key]
-    if not _finite_number(v):
-        _fail(source, prefix + key, f"must be a finite number, got {_shown(v)}")
-    if positive and v <= 0:
-        _fail(source, prefix + key, f"must be positive, got {_shown(v)}")
-    return float(v)
-
-
-def _point(v, key, source, sizes=(2,)):
-    if not isinstance(v, list) or len(v) not in sizes or not all(_finite_number(c) for c in v):
-        shape = " or ".join(f"{n} numbers" for n in sizes)
-        _fail(source, key, f"must be a list of {shape}, got {_shown(v)}")
-    return tuple(float(c) for c in v)
-
-
-def _within(source, key, value, low, high, why):
+def _within(keys, key, value, low, high, why):
     if not low <= abs(value) <= high:
-        _fail(source, key, f"must lie within [{low:g}, {high:g}] in magnitude, got {value:.6g}: {why}")
+        keys.fail(key, f"must lie within [{low:g}, {high:g}] in magnitude, got {value:.6g}: {why}")
 
 
-def _check_reach(source, spec, goals):
+def _check_reach(keys, spec, goals):
     """The car's reach ``speed * horizon`` and the goals' distance from the start within :data:`REACH_RATIO` of
     each other: beyond, a turn changes the costs by less than iLQR's stopping test resolves (relative 1e-12)."""
     reach = spec.speed * spec.horizon
     key, far = max(((k, math.dist(p, spec.start[:2])) for k, p in goals), key=lambda kp: kp[1])
     if far > REACH_RATIO * reach or reach > REACH_RATIO * far:
         blame = key if far > reach else "speed"
-        _fail(source, blame, f"the car's reach speed x horizon = {reach:.3g} and the goals' distance {far:.3g} from "
+        keys.fail(blame, f"the car's reach speed x horizon = {reach:.3g} and the goals' distance {far:.3g} from "
               f"the start differ by more than {REACH_RATIO:g} times: a turn would change the costs by less than "
               "iLQR's stopping test resolves (relative 1e-12 of the cost)")
 
 
-def _check_magnitudes(source, spec):
+def _check_magnitudes(keys, spec):
     """Refuse a spec whose numbers would take the solvers beyond float64 (see :data:`MAGNITUDE`), naming the key."""
     points = [("start", spec.start[:2]), ("goal", spec.goal)] + [(f"distractors[{i}]", p)
                                                                  for i, p in enumerate(spec.distractors)]
     far = "squared distances times weights would leave float64's range; express the positions in larger units"
     for key, p in points:
-        _within(source, key, max(abs(c) for c in p), 0.0, MAGNITUDE, far)
+        _within(keys, key, max(abs(c) for c in p), 0.0, MAGNITUDE, far)
     if spec.dynamics == "dubins":
-        _within(source, "start", spec.start[2], 0.0, HEADING_MAX, "float64 cannot resolve so large a heading (rad)")
+        _within(keys, "start", spec.start[2], 0.0, HEADING_MAX, "float64 cannot resolve so large a heading (rad)")
     scale = max(max(abs(c) for c in p) for _, p in points)
     for i, g in enumerate(spec.distractors):
         gap = math.dist(g, spec.goal)
         if gap <= SEPARATION_RTOL * scale:
-            _fail(source, f"distractors[{i}]", f"lies {gap:.3g} from the goal, within {SEPARATION_RTOL:g} of the "
+            keys.fail(f"distractors[{i}]", f"lies {gap:.3g} from the goal, within {SEPARATION_RTOL:g} of the "
                   f"positions' scale {scale:.3g} (the largest coordinate of start, goal and distractors): at that "
                   "scale float64 cannot tell the two hypotheses apart")
     small = "far from 1 in float64 terms: the cost's products would underflow or overflow; rescale the units"
     for key in ("terminal_weight", "effort_weight") + (("speed",) if spec.dynamics == "dubins" else ()):
-        _within(source, key, getattr(spec, key), 1 / MAGNITUDE, MAGNITUDE, small)
-    _within(source, "horizon", spec.dt, 1 / MAGNITUDE, MAGNITUDE,
+        _within(keys, key, getattr(spec, key), 1 / MAGNITUDE, MAGNITUDE, small)
+    _within(keys, "horizon", spec.dt, 1 / MAGNITUDE, MAGNITUDE,
             f"the time step horizon / steps = {spec.dt:.3g} s is {small}")
     rounding = f"below {ALPHA_MIN:g}, float64's rounding of (1 + alpha) J1 - J0 (relative 1e-16 / alpha) shows"
     alphas = [("alpha", spec.alpha)] if spec.alpha is not None else []
     if spec.anticipation is not None:
         alphas += [("anticipation.alpha_start", spec.anticipation[0]), ("anticipation.alpha_end", spec.anticipation[1])]
     for key, a in alphas:
-        _within(source, key, a, ALPHA_MIN, MAGNITUDE, rounding if a < ALPHA_MIN else small)
+        _within(keys, key, a, ALPHA_MIN, MAGNITUDE, rounding if a < ALPHA_MIN else small)
     if spec.eta is not None:
-        _within(source, "eta", spec.eta, 0.0, MAGNITUDE, "a bound on J1 - J0 (nats) beyond float64's reach")
+        _within(keys, "eta", spec.eta, 0.0, MAGNITUDE, "a bound on J1 - J0 (nats) beyond float64's reach")
     if spec.dynamics == "dubins":
-        _check_reach(source, spec, points[1:])
+        _check_reach(keys, spec, points[1:])
 
 
 def legible_spec(mapping, source="spec"):
     """Check a spec (a dict, as TOML reads it) and return a :class:`LegibleSpec`; ValueError names
     ``source`` and the key."""
-    if not isinstance(mapping, dict):
-        raise ValueError(f"{source}: must be a table of keys, got {type(mapping).__name__}")
-    unknown = sorted(set(mapping) - _KEYS)
-    if unknown:
-        _fail(source, unknown[0], f"unknown key (known: {', '.join(sorted(_KEYS))})")
-    d = mapping
-    dynamics = d.get("dynamics", "single-integrator")
-    if dynamics not in DYNAMICS:
-        _fail(source, "dynamics", f"must be one of {list(DYNAMICS)}, got {dynamics!r}")
-    if "start" not in d:
-        _fail(source, "start", "missing (required)")
-    start = _point(d["start"], "start", source, (3,) if dynamics == "dubins" else (2,))
-    if "goal" not in d:
-        _fail(source, "goal", "missing (required)")
-    goal = _point(d["goal"], "goal", source)
-    if "distractors" not in d:
-        _fail(source, "distractors", "missing (required)")
-    if not isinstance(d["distractors"], list) or not d["distractors"]:
-        _fail(source, "distractors", f"must be a non-empty list of [x, y] points, got {d['distractors']!r}")
-    distractors = tuple(_point(p, f"distractors[{i}]", source) for i, p in enumerate(d["distractors"]))
+    keys = Keys(mapping, source).known(sorted(_KEYS), ("start", "goal", "distractors"))
+    dynamics = keys.choice("dynamics", DYNAMICS, default="single-integrator")
+    start = tuple(keys.numbers("start", 3 if dynamics == "dubins" else 2))
+    goal = tuple(keys.numbers("goal", 2))
+    distractors = keys.get("distractors")
+    if not isinstance(distractors, list) or not distractors:
+        keys.fail("distractors", f"must be a non-empty list of [x, y] points, got {shown(distractors)}")
+    distractors = tuple(tuple(keys.numbers(f"distractors[{i}]", 2, value=p)) for i, p in enumerate(distractors))
     for i, p in enumerate(distractors):
         if p == goal:
-            _fail(source, f"distractors[{i}]", f"equals the goal {list(goal)}: nothing to tell apart")
-    horizon = _number(d, "horizon", source, positive=True)
-    steps = d.get("steps")
+            keys.fail(f"distractors[{i}]", f"equals the goal {list(goal)}: nothing to tell apart")
+    horizon = keys.number("horizon", low=0, low_open=True)
+    steps = _steps(keys, len(distractors))
+    has_alpha, has_eta = "alpha" in keys, "eta" in keys
+    if has_alpha == has_eta:
+        keys.fail("alpha", "give exactly one of alpha (eq. 6.15) and eta (the QP of section 6.5)")
+    alpha = keys.number("alpha", low=0, low_open=True) if has_alpha else None
+    eta = keys.number("eta") if has_eta else None
+    if has_eta and dynamics != "single-integrator":
+        keys.fail("eta", "the QP of section 6.5 needs dynamics = \"single-integrator\"")
+    anticipation = _anticipation(keys, dynamics, has_alpha, steps) if "anticipation" in keys else None
+    if dynamics != "dubins" and "speed" in keys:
+        keys.fail("speed", "only for dynamics = \"dubins\"")
+    weights = [keys.number(k, low=0, low_open=True, default=d) for k, d in
+               (("terminal_weight", 1.0), ("effort_weight", 1.0), ("speed", 3.0))]
+    spec = LegibleSpec(dynamics, start, goal, distractors, horizon, steps, alpha, eta, anticipation,
+                       *(float(w) for w in weights))
+    _check_magnitudes(keys, spec)
+    return spec
+
+
+def _steps(keys, n_distractors):
+    """``steps`` in 1..MAX_STEPS; beyond, the memory and time it would take."""
+    steps = keys.get("steps")
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
-        _fail(source, "steps", f"must be an integer in 1..{MAX_STEPS}, got {_shown(steps)}")
+        keys.fail("steps", f"must be an integer in 1..{MAX_STEPS}, got {shown(steps)}")
     if steps > MAX_STEPS:
         many = float(min(steps, 10 ** 300))
-        _fail(source, "steps", f"must be an integer in 1..{MAX_STEPS}, got {_shown(steps)}: its motions, Riccati "
-              f"gains and observer factors would need about {many * BYTES_PER_STEP * (2 + len(distractors)) / 2 ** 30:.3g}"
-              f" GiB, and a solve would take {many / MAX_STEPS:.3g} times the few seconds {MAX_STEPS} steps take")
-    has_alpha, has_eta = "alpha" in d, "eta" in d
-    if has_alpha == has_eta:
-        _fail(source, "alpha", "give exactly one of alpha (eq. 6.15) and eta (the QP of section 6.5)")
-    alpha = _number(d, "alpha", source, positive=True) if has_alpha else None
-    eta = _number(d, "eta", source) if has_eta else None
-    if has_eta and dynamics != "single-integrator":
-        _fail(source, "eta", "the QP of section 6.5 needs dynamics = \"single-integrator\"")
-    anticipation = None
-    if "anticipation" in d:
-        a = d["anticipation"]
-        if not isinstance(a, dict):
-            _fail(source, "anticipation", "must be a table ([anticipation])")
-        if dynamics != "single-integrator" or not has_alpha:
-            _fail(source, "anticipation", "needs dynamics = \"single-integrator\" and alpha")
-        unknown = sorted(set(a) - _ANTICIPATION_KEYS)
-        if unknown:
-            _fail(source, f"anticipation.{unknown[0]}", f"unknown key (known: {', '.join(sorted(_ANTICIPATION_KEYS))})")
-        lo = _number(a, "alpha_start", source, positive=True, prefix="anticipation.")
-        hi = _number(a, "alpha_end", source, positive=True, prefix="anticipation.")
-        if hi < lo:
-            _fail(source, "anticipation.alpha_end", f"must be >= alpha_start = {lo:g}, got {hi:g}")
-        every = a.get("every", 1)
-        if isinstance(every, bool) or not isinstance(every, int) or not 1 <= every <= steps:
-            _fail(source, "anticipation.every", f"must be an integer in 1..steps ({steps}), got {_shown(every)}")
-        anticipation = (lo, hi, every)
-    if dynamics != "dubins" and "speed" in d:
-        _fail(source, "speed", "only for dynamics = \"dubins\"")
-    spec = LegibleSpec(dynamics, start, goal, distractors, horizon, steps, alpha, eta, anticipation,
-                       _number(d, "terminal_weight", source, 1.0, positive=True),
-                       _number(d, "effort_weight", source, 1.0, positive=True),
-                       _number(d, "speed", source, 3.0, positive=True))
-    _check_magnitudes(source, spec)
-    return spec
+        keys.fail("steps", f"must be an integer in 1..{MAX_STEPS}, got {shown(steps)}: its motions, Riccati gains and "
+                  f"observer factors would need about {many * BYTES_PER_STEP * (2 + n_distractors) / 2 ** 30:.3g} GiB, "
+                  f"and a solve would take {many / MAX_STEPS:.3g} times the few seconds {MAX_STEPS} steps take")
+    return steps
+
+
+def _anticipation(keys, dynamics, has_alpha, steps):
+    """``(alpha_start, alpha_end, every)`` of the ``[anticipation]`` table."""
+    if not isinstance(keys.get("anticipation"), dict):
+        keys.fail("anticipation", "must be a table ([anticipation])")
+    if dynamics != "single-integrator" or not has_alpha:
+        keys.fail("anticipation", "needs dynamics = \"single-integrator\" and alpha")
+    a = keys.table("anticipation", sorted(_ANTICIPATION_KEYS))
+    lo = a.number("alpha_start", low=0, low_open=True)
+    hi = a.number("alpha_end", low=0, low_open=True)
+    if hi < lo:
+        a.fail("alpha_end", f"must be >= alpha_start = {lo:g}, got {hi:g}")
+    return lo, hi, a.number("every", 1, steps, integer=True, default=1)
 
 
 def load_legible_spec(path):
@@ -261,7 +214,7 @@ def _costs(spec):
     return J1, J0s
 
 
-def solve_legible(spec):
+def solve_legible(spec, allow_large=None):
     """The legible and the predictable (H1-optimal) motion of ``spec``.
 
     Returns a dict: ``legible`` and ``predictable`` as ``(xs (N+1, n), us (N, m))``, ``method``,
@@ -269,10 +222,12 @@ def solve_legible(spec):
     single integrator; negative values favour the goal) or, for the Dubins car, ``J_1 - J_0``
     (equal to ``log Lambda`` up to a constant) -- and ``alphas`` (the weight in force at each
     step) or ``duals`` (the QP's multipliers) where they apply. A ValueError names the key when the
-    spec asks for what cannot be solved or represented; no output is ever NaN or infinite.
+    spec asks for what cannot be solved or represented; no output is ever NaN or infinite. ``allow_large``:
+    as :func:`mutual.budget.check` (the work grows with the steps times the goals).
     """
     if not isinstance(spec, LegibleSpec):
         raise ValueError("spec must be a LegibleSpec (use legible_spec or load_legible_spec)")
+    budget.check(budget.legible(spec.steps, 1 + len(spec.distractors), spec.dynamics), allow_large)
     if spec.dynamics == "dubins":
         from .spec_dubins import solve_dubins
         out = solve_dubins(spec)

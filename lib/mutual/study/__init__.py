@@ -9,31 +9,42 @@ the teaming task (:mod:`.teaming`), whole cohorts of simulated supervisors (:mod
 misaligned-expectations illustration (:mod:`.misalignment`), figures (:mod:`.plots`) and the
 notebook's live views (:mod:`.explore`).
 
-The statistics and the tables import no JAX: ``import mutual.study`` stays light (issue 23), and
-the simulation's names (``Study``, ``simulate_study``, ``Team``, ...), which need chapter 4's value
-functions, are imported on first use.
+The statistics and the tables import no JAX: ``import mutual.study`` stays light. The simulation's
+names (``Study``, ``simulate_study``, ``Team``, ...), which need chapter 4's value functions, the power
+of a replication (:mod:`.power`, :mod:`.cohort_power`, :mod:`.sweep`) and the figures are imported on
+first use.
 """
 
+from ..lazy import lazy_names
 from .data import read_table, write_table
-from .design import study_design
+from .design import design_balance, study_design
 from .stats import DegenerateDataError, RMAnova, paired_t_holm, pairwise_comparisons, rm_anova, tukey_rm
 
-__all__ = ["DegenerateDataError", "RMAnova", "Study", "Team", "TeamingConfig", "paired_t_holm", "pairwise_comparisons",
-           "read_table", "rm_anova", "simulate_study", "simulate_teaming", "study_design", "tukey_rm",
-           "write_simulated_study", "write_table"]
+_ON_FIRST_USE = {
+    # the simulated study (it loads JAX through chapter 4's value functions)
+    "Study": "cohort", "simulate_study": "cohort", "write_simulated_study": "cohort", "study_value_functions": "cohort",
+    "avoidance_onset": "cohort", "learned_set_cluster": "cohort", "predicted_and_observed": "cohort",
+    "Team": "teaming", "TeamingConfig": "teaming", "simulate_teaming": "teaming",
+    # the thesis's statistics re-derived from its published numbers
+    "design_from_f_dofs": "published", "f_p_value": "published", "recover_from_summary": "published",
+    "table_5_1_ratios": "published",
+    # power of a replication: analytic, then simulated cohorts on Dask
+    "contrast_sample_size": "power", "dz_from_summary": "power", "effect_size_from_f": "power",
+    "gpower_table": "power", "noncentrality_interval": "power", "replication_plan": "power",
+    "CohortSetting": "cohort_power", "CohortTask": "cohort_power", "code_version": "cohort_power",
+    "simulate_cohort": "cohort_power", "TaskCache": "sweep", "run_tasks": "sweep",
+    "implied_effect": "power_summary", "power_table": "power_summary", "recommendations": "power_summary",
+    # figures (matplotlib)
+    "plot_condition_means": "plots", "finish_power_axes": "power_plots", "plot_simulated_power": "power_plots",
+}
 
-_SIMULATION = {"Study": "cohort", "simulate_study": "cohort", "write_simulated_study": "cohort",
-               "Team": "teaming", "TeamingConfig": "teaming", "simulate_teaming": "teaming"}
+__all__ = ["CohortSetting", "CohortTask", "DegenerateDataError", "RMAnova", "Study", "TaskCache", "Team",
+           "TeamingConfig", "avoidance_onset", "code_version", "contrast_sample_size", "design_balance",
+           "design_from_f_dofs", "dz_from_summary", "effect_size_from_f", "f_p_value", "finish_power_axes",
+           "gpower_table", "implied_effect", "learned_set_cluster", "noncentrality_interval", "paired_t_holm",
+           "pairwise_comparisons", "plot_condition_means", "plot_simulated_power", "power_table",
+           "predicted_and_observed", "read_table", "recommendations", "recover_from_summary", "replication_plan",
+           "rm_anova", "run_tasks", "simulate_cohort", "simulate_study", "simulate_teaming", "study_design",
+           "study_value_functions", "table_5_1_ratios", "tukey_rm", "write_simulated_study", "write_table"]
 
-
-def __getattr__(name):
-    """The simulation's names, imported when first used (they load JAX through chapter 4)."""
-    if name not in _SIMULATION:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    if _SIMULATION[name] == "cohort":
-        from . import cohort as module
-    else:
-        from . import teaming as module
-    value = getattr(module, name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _ON_FIRST_USE)

@@ -5,6 +5,8 @@ analysis needs: named columns, numbers, one row per cell (or their mean), a bala
 import numpy as np
 import pandas as pd
 
+from ..inputs import exact_doubles
+
 
 def _select_measure(data, dv):
     """Tidy trial tables (``measure`` and ``value`` columns): ``dv`` may name a measure."""
@@ -59,7 +61,7 @@ def cell_table(data, dv, within, subject, aggregate=None, levels=None):
                          f"{values.iloc[bad.argmax()]!r}")
     if aggregate not in (None, "mean"):
         raise ValueError(f"aggregate must be None or 'mean', got {aggregate!r}")
-    d = data[[subject, within]].assign(**{dv: values.astype(float)})
+    d = data[[subject, within]].assign(**{dv: exact_doubles(f"column {dv!r}", values)})
     if levels is not None:
         if isinstance(levels, str) or not hasattr(levels, "__iter__"):
             raise ValueError(f"levels must be a list of the levels of {within!r}, got {levels!r}")
@@ -76,7 +78,10 @@ def cell_table(data, dv, within, subject, aggregate=None, levels=None):
     if aggregate is None and (sizes > 1).any():
         cell = sizes[sizes > 1].index[0]
         raise ValueError(f"several rows for ({subject}, {within}) = {cell}; pass aggregate='mean' to average them")
-    wide = d.groupby([subject, within])[dv].mean().unstack(within)
+    top = float(np.max(np.abs(d[dv]))) if len(d) else 0.0
+    e = int(np.frexp(top)[1]) if top > 0 else 0       # means in scaled units: two 1.7e308 average to 1.7e308, not inf
+    wide = np.ldexp(d.assign(**{dv: np.ldexp(d[dv].to_numpy(), -e)}).groupby([subject, within])[dv].mean()
+                    .unstack(within), e)
     wide = wide.reindex(columns=levels) if levels is not None else wide.reindex(columns=sorted(wide.columns))
     if wide.isna().any().any():
         holes = wide.isna()

@@ -17,11 +17,9 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from ..supervision.dubins import SPEED, TRUE_W_MAX, check_states
-from ..supervision.reachability import (FULL_GRID, QUICK_GRID, ValueFunction, ValueLibrary, avoid_value_function,
-                                        unsafe_set_contains, value_library)
-from ..supervision.supervisor import approach_scenes, NoisySupervisor, validate_interventions
-from ..supervision.fit import fit_supervisor
+from ..supervision import (FULL_GRID, QUICK_GRID, SPEED, TRUE_W_MAX, NoisySupervisor, ValueFunction, ValueLibrary,
+                           approach_scenes, avoid_value_function, check_states, fit_supervisor, unsafe_set_contains,
+                           validate_interventions, value_library)
 from .data import OBJECTIVE_MEASURES, TRIAL_COLUMNS, illustrative_questionnaire, validate_trials, write_table
 from .design import DESIGN_COLUMNS, TREATMENTS, study_design
 from .teaming import OBSTACLE_RADIUS, Team, TeamingConfig, TeamingRecord, simulate_teaming
@@ -198,7 +196,7 @@ def study_value_functions(quick=False, progress=False, exact=False):
     (:class:`mutual.supervision.exact.ExactValueFunction`): no HJ solve, no interpolation error."""
     grid = QUICK_GRID if quick else FULL_GRID
     if exact:
-        from ..supervision.exact import exact_library, exact_value_function
+        from ..supervision import exact_library, exact_value_function
 
         return (exact_library(STUDY_W_MAXES, OBSTACLE_RADIUS, grid),
                 exact_value_function(TRUE_W_MAX, 2 * OBSTACLE_RADIUS, grid))

@@ -34,9 +34,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..supervision.dubins import TRUE_W_MAX
-from ..supervision.fit import LibraryEdgeWarning, fit_supervisor
-from ..supervision.reachability import ValueFunction, ValueLibrary, unsafe_set_contains
+from ..supervision import (TRUE_W_MAX, LibraryEdgeWarning, ValueFunction, ValueLibrary, fit_supervisor,
+                           unsafe_set_contains)
 from . import cohort as _cohort
 from .design import TREATMENTS, study_design
 from .teaming import Team, TeamingConfig, simulate_teaming

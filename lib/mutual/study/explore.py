@@ -12,8 +12,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy import stats as sps
 
+from ..inputs import check_number
 from ..style import PALETTE
-from ..supervision.supervisor import NoisySupervisor
+from ..supervision import NoisySupervisor
 from .cohort import simulate_study, study_value_functions
 from .design import TREATMENTS
 from .misalignment import straight_approach_starts, supervised_approaches
@@ -29,23 +30,10 @@ def _value_functions(quick=True):
     return study_value_functions(quick=quick)
 
 
-def _count(name, value, low=0, high=50):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-        raise ValueError(f"{name} must be a whole number in {low}..{high}, got {value!r}")
-    return int(value)
-
-
-def _number(name, value, low, high):
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or not np.isfinite(value) \
-            or not low <= value <= high:
-        raise ValueError(f"{name} must be a number in [{low}, {high}], got {value!r}")
-    return float(value)
-
-
 def _cohort_kinds(n_standard, n_conservative, n_gradual, n_agile):
-    counts = {"standard-like": _count("n_standard", n_standard), "conservative-like":
-              _count("n_conservative", n_conservative), "gradual": _count("n_gradual", n_gradual),
-              "agile": _count("n_agile", n_agile)}
+    counts = {kind: check_number(name, value, 0, 50, integer=True) for kind, name, value in (
+        ("standard-like", "n_standard", n_standard), ("conservative-like", "n_conservative", n_conservative),
+        ("gradual", "n_gradual", n_gradual), ("agile", "n_agile", n_agile))}
     kinds = tuple(k for k, c in counts.items() for _ in range(c))
     if len(kinds) < 2:
         raise ValueError(f"the cohort needs at least 2 recruits, got {len(kinds)}")
@@ -69,13 +57,13 @@ def cohort_view(n_standard=3, n_conservative=3, n_gradual=5, n_agile=1, noise=0.
     ANOVA of false positives per trial (left, mean +- SE and each participant) and the false-positive
     rate per detected encounter (right, mean with 95% CI over participants)."""
     kinds = _cohort_kinds(n_standard, n_conservative, n_gradual, n_agile)
-    noise = _number("noise", noise, 0.0, 1.0)
-    trial_seconds = _number("trial_seconds", trial_seconds, 1.0, 600.0)
+    noise = check_number("noise", noise, 0.0, 1.0)
+    trial_seconds = check_number("trial_seconds", trial_seconds, 1.0, 600.0)
     library, conservative = _value_functions(True)
     fig = Figure(figsize=(9.5, 3.8), layout="constrained")
     left, right = fig.subplots(1, 2)
     try:
-        study = simulate_study(library, conservative, n_scenes=_count("n_scenes", n_scenes, 2, 400),
+        study = simulate_study(library, conservative, n_scenes=check_number("n_scenes", n_scenes, 2, 400, integer=True),
                                config=TeamingConfig(duration=trial_seconds), seed=seed, kinds=kinds,
                                sigma_range=(noise, noise))
         fp = study.trials[study.trials["measure"] == "false_positives"]
@@ -128,11 +116,11 @@ def misalignment_view(w_supervisor=0.5, mu=0.3, noise=0.05, k=0.0, n_robots=40, 
     if w_supervisor not in set(library.w_maxes.tolist()):
         raise ValueError(f"w_supervisor must be one of the library's turn rates {library.w_maxes.tolist()}, "
                          f"got {w_supervisor!r}")
-    mu = _number("mu", mu, 0.0, 3.0)
-    noise = _number("noise", noise, 0.0, 1.0)
-    k = _number("k", k, -3.0, 5.0)
+    mu = check_number("mu", mu, 0.0, 3.0)
+    noise = check_number("noise", noise, 0.0, 1.0)
+    k = check_number("k", k, -3.0, 5.0)
     supervisor = NoisySupervisor(library[library.index_of(w_supervisor)], mu, noise)
-    starts = straight_approach_starts(_count("n_robots", n_robots, 1, 400), np.random.default_rng(seed))
+    starts = straight_approach_starts(check_number("n_robots", n_robots, 1, 400, integer=True), np.random.default_rng(seed))
     fig = Figure(figsize=(9.5, 3.6), layout="constrained")
     axes = fig.subplots(1, 2, sharey=True)
     teams = [("ignoring: Standard set, alpha = 0", library[library.index_of(1.0)], 0.0),

@@ -11,10 +11,7 @@ level above ``mu``.
 
 import numpy as np
 
-from ..supervision.control import safety_controller, simulate_filtered
-from ..supervision.dubins import SPEED, TRUE_W_MAX
-from ..supervision.reachability import ValueFunction
-from ..supervision.supervisor import NoisySupervisor
+from ..supervision import SPEED, TRUE_W_MAX, NoisySupervisor, ValueFunction, safety_controller, simulate_filtered
 
 
 def straight_approach_starts(n, rng, start_distance=7.0, spread=0.6):

@@ -28,25 +28,8 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 
+from ..inputs import check_number, number, probability
 from .published import design_from_f_dofs
-
-
-def _positive_int(name, value, least):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-        raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
-    return int(value)
-
-
-def _probability(name, value):
-    if not (isinstance(value, (int, float, np.floating)) and np.isfinite(value) and 0 < value < 1):
-        raise ValueError(f"{name} must lie strictly between 0 and 1, got {value!r}")
-    return float(value)
-
-
-def _number(name, value):
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    return float(value)
 
 
 def _effect(f, partial_eta_squared, rho, m=None):
@@ -54,10 +37,10 @@ def _effect(f, partial_eta_squared, rho, m=None):
     if (f is None) == (partial_eta_squared is None):
         raise ValueError("give exactly one of f (G*Power's effect size, with rho) and partial_eta_squared")
     if f is not None:
-        if not (np.isfinite(_number("f", f)) and f >= 0):
+        if not (np.isfinite(number("f", f)) and f >= 0):
             raise ValueError(f"f must be a non-negative number, got {f!r}")
         low = -1.0 / (m - 1) if m is not None else -1.0
-        if rho is None or not (np.isfinite(_number("rho", rho)) and low <= rho < 1):
+        if rho is None or not (np.isfinite(number("rho", rho)) and low <= rho < 1):
             where = f"[-1/(m-1), 1) = [{low:.4g}, 1) for m = {m} measurements" if m is not None else "(-1, 1)"
             raise ValueError(f"rho (correlation among the repeated measures) must lie in {where}, got {rho!r}: "
                              "below -1/(m-1) no covariance matrix has equal correlations")
@@ -67,20 +50,20 @@ def _effect(f, partial_eta_squared, rho, m=None):
     if rho is not None:
         raise ValueError("rho must not be given with partial_eta_squared: its error term already holds the "
                          "correlation (f_p^2 = eta_p^2 / (1 - eta_p^2))")
-    if not (np.isfinite(_number("partial_eta_squared", partial_eta_squared)) and 0 <= partial_eta_squared < 1):
+    if not (np.isfinite(number("partial_eta_squared", partial_eta_squared)) and 0 <= partial_eta_squared < 1):
         raise ValueError(f"partial_eta_squared must lie in [0, 1), got {partial_eta_squared!r}")
     return partial_eta_squared / (1.0 - partial_eta_squared)
 
 
 def _epsilon(epsilon, m):
-    if not (np.isfinite(_number("epsilon", epsilon)) and 1.0 / (m - 1) - 1e-12 <= epsilon <= 1):
+    if not (np.isfinite(number("epsilon", epsilon)) and 1.0 / (m - 1) - 1e-12 <= epsilon <= 1):
         raise ValueError(f"epsilon must lie in [1/(m-1), 1] = [{1 / (m - 1):.3g}, 1], got {epsilon!r}")
     return float(epsilon)
 
 
 def rm_anova_noncentrality(n, m, f=None, partial_eta_squared=None, rho=None, epsilon=1.0):
     """``(lambda, df1, df2)`` of G*Power's repeated-measures, within-factors F test (module docstring)."""
-    n, m = _positive_int("n", n, 2), _positive_int("m", m, 2)
+    n, m = check_number("n", n, low=2, integer=True), check_number("m", m, low=2, integer=True)
     fp2 = _effect(f, partial_eta_squared, rho, m)
     eps = _epsilon(epsilon, m)
     lam = fp2 * n * m * eps
@@ -102,7 +85,7 @@ def noncentral_f_sf(x, dfn, dfd, nc, lower=False):
     ``F' -> ((nc + dfn) / dfn) / (chi2_dfd / dfd)``, so ``P(F' > x) = P(chi2_dfd < dfd (nc + dfn) / (dfn x))``
     (within 1e-8 of scipy at 1e10, closer beyond). A value scipy gives outside [0, 1] raises ValueError.
     """
-    x, dfn, dfd, nc = (_number(k, v) for k, v in (("x", x), ("dfn", dfn), ("dfd", dfd), ("nc", nc)))
+    x, dfn, dfd, nc = (number(k, v) for k, v in (("x", x), ("dfn", dfn), ("dfd", dfd), ("nc", nc)))
     if not (dfn > 0 and dfd > 0 and np.isfinite(dfn) and np.isfinite(dfd)) or not (nc >= 0) or np.isnan(x):
         raise ValueError(f"the noncentral F needs positive finite degrees of freedom, nc >= 0 and a number x; got "
                          f"dfn={dfn!r}, dfd={dfd!r}, nc={nc!r}, x={x!r}")
@@ -129,7 +112,7 @@ def rm_anova_power(n, m, f=None, partial_eta_squared=None, rho=None, epsilon=1.0
     ``n`` subjects, ``m`` levels, effect ``f`` with correlation ``rho`` (or ``partial_eta_squared``),
     sphericity correction ``epsilon`` in ``[1/(m-1), 1]``, level ``alpha``.
     """
-    alpha = _probability("alpha", alpha)
+    alpha = probability("alpha", alpha)
     lam, df1, df2 = rm_anova_noncentrality(n, m, f, partial_eta_squared, rho, epsilon)
     crit = stats.f.isf(alpha, df1, df2)
     return noncentral_f_sf(crit, df1, df2, lam)      # alpha at zero effect
@@ -139,11 +122,11 @@ def rm_anova_sample_size(power, m, f=None, partial_eta_squared=None, rho=None, e
                          n_max=100_000):
     """The smallest number of subjects whose :func:`rm_anova_power` reaches ``power`` (G*Power's
     "a priori" analysis; it reports the same integer)."""
-    power = _probability("power", power)
-    if not power > _probability("alpha", alpha):
+    power = probability("power", power)
+    if not power > probability("alpha", alpha):
         raise ValueError(f"power must exceed alpha, got power={power}, alpha={alpha}")
     kw = dict(f=f, partial_eta_squared=partial_eta_squared, rho=rho, epsilon=epsilon, alpha=alpha)
-    if _effect(f, partial_eta_squared, rho, _positive_int("m", m, 2)) == 0:
+    if _effect(f, partial_eta_squared, rho, check_number("m", m, low=2, integer=True)) == 0:
         raise ValueError("the effect size is zero: no sample size reaches a power above alpha")
     if rm_anova_power(n_max, m, **kw) < power:
         raise ValueError(f"even n_max={n_max} subjects do not reach power {power}")
@@ -207,8 +190,8 @@ def noncentrality_interval(F, df1, df2, confidence=0.95):
     """Confidence interval of the noncentrality of an observed ``F(df1, df2)`` (Steiger 2004):
     ``lambda_lo`` with ``P(F' <= F | lambda_lo) = 1 - a/2`` and ``lambda_hi`` with ``a/2``
     (``a = 1 - confidence``); an end is 0 where even ``lambda = 0`` makes ``F`` that unlikely."""
-    confidence = _probability("confidence", confidence)
-    if not (np.isfinite(_number("F", F)) and F >= 0):
+    confidence = probability("confidence", confidence)
+    if not (np.isfinite(number("F", F)) and F >= 0):
         raise ValueError(f"F must be a non-negative number (finite), got {F!r}")
     a = 1.0 - confidence
 
@@ -235,7 +218,7 @@ def unbiased_noncentrality(F, df1, df2):
 def effect_size_from_f(F, df1, df2, confidence=0.95):
     """What a reported one-way repeated-measures ``F(df1, df2)`` says about the effect (see
     :class:`EffectSizeEstimate`). E.g. the thesis's ``F(2, 20) = 8.72`` (Sec. 5.3.1)."""
-    if not (np.isfinite(_number("F", F)) and F >= 0):
+    if not (np.isfinite(number("F", F)) and F >= 0):
         raise ValueError(f"F must be a non-negative number (finite), got {F!r}")
     shape = design_from_f_dofs(df1, df2)  # raises for an F that is not one-way repeated measures
     m, n = shape["levels"], shape["subjects"]
@@ -273,9 +256,9 @@ def paired_t_power(dz, n, alpha=0.05, comparisons=1):
     differences over their SD) and ``n`` subjects, at ``alpha / comparisons`` (Bonferroni; with
     ``comparisons=1`` uncorrected). Holm's step-down rejects at least what Bonferroni rejects, so
     this is a lower bound of a contrast's power under Holm, and ``comparisons=1`` an upper one."""
-    n = _positive_int("n", n, 2)
-    comparisons = _positive_int("comparisons", comparisons, 1)
-    level = _probability("alpha", alpha) / comparisons
+    n = check_number("n", n, low=2, integer=True)
+    comparisons = check_number("comparisons", comparisons, low=1, integer=True)
+    level = probability("alpha", alpha) / comparisons
     return _two_sided_t_power(_dz(dz) * np.sqrt(n), n - 1, stats.t.isf(level / 2, n - 1))
 
 
@@ -285,8 +268,8 @@ def tukey_rm_power(dz, n, m, alpha=0.05):
     ``df = (m - 1)(n - 1)``. Under sphericity the difference has variance ``2 MSE_pop / n`` and is
     independent of MSE, so ``q / sqrt 2`` is a noncentral |t| with ``df`` and ``ncp = dz sqrt(n)``:
     exact, where ``dz`` is the pair's standardized paired difference."""
-    n, m = _positive_int("n", n, 2), _positive_int("m", m, 2)
-    alpha = _probability("alpha", alpha)
+    n, m = check_number("n", n, low=2, integer=True), check_number("m", m, low=2, integer=True)
+    alpha = probability("alpha", alpha)
     df = (m - 1) * (n - 1)
     crit = stats.studentized_range.isf(alpha, m, df) / np.sqrt(2)
     return _two_sided_t_power(_dz(dz) * np.sqrt(n), df, crit)
@@ -295,7 +278,7 @@ def tukey_rm_power(dz, n, m, alpha=0.05):
 def contrast_sample_size(dz, power, m=3, alpha=0.05, test="tukey", n_max=10_000):
     """Smallest ``n`` whose contrast power (``test``: ``"tukey"``, ``"paired"`` uncorrected or
     ``"bonferroni"`` over the ``m (m - 1) / 2`` pairs) reaches ``power``."""
-    power = _probability("power", power)
+    power = probability("power", power)
     pairs = m * (m - 1) // 2
     fns = {"tukey": lambda n: tukey_rm_power(dz, n, m, alpha), "paired": lambda n: paired_t_power(dz, n, alpha),
            "bonferroni": lambda n: paired_t_power(dz, n, alpha, pairs)}
@@ -330,7 +313,7 @@ def wilson_interval(successes, trials, confidence=0.95):
         raise ValueError(f"successes and trials must be finite counts, got {successes!r} and {trials!r}")
     if np.any(trials < 1) or np.any(successes < 0) or np.any(successes > trials):
         raise ValueError("need 0 <= successes <= trials and trials >= 1")
-    z = stats.norm.isf((1 - _probability("confidence", confidence)) / 2)
+    z = stats.norm.isf((1 - probability("confidence", confidence)) / 2)
     p = successes / trials
     centre = (p + z * z / (2 * trials)) / (1 + z * z / trials)
     half = z * np.sqrt(p * (1 - p) / trials + z * z / (4 * trials ** 2)) / (1 + z * z / trials)
@@ -395,10 +378,10 @@ def gpower_table(m, f, rho=0.5, epsilon=1.0, alpha=0.05, n_values=(), targets=(0
     for n in n_values:
         lam, df1, df2 = rm_anova_noncentrality(n, m, f=f, rho=rho, epsilon=epsilon)
         rows.append({"kind": "power at N", "target": None, "n": int(n), "lambda": lam, "df1": df1, "df2": df2,
-                     "F_crit": float(stats.f.isf(_probability("alpha", alpha), df1, df2)),
+                     "F_crit": float(stats.f.isf(probability("alpha", alpha), df1, df2)),
                      "power": rm_anova_power(n, m, f=f, rho=rho, epsilon=epsilon, alpha=alpha)})
     for t in targets:
-        t = _probability("power", t)
+        t = probability("power", t)
         kw = dict(f=f, rho=rho, epsilon=epsilon, alpha=alpha)
         reached = _effect(f, None, rho, m) > 0 and t > alpha and rm_anova_power(n_max, m, **kw) >= t
         n = rm_anova_sample_size(t, m, n_max=n_max, **kw) if reached else None

@@ -14,14 +14,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..inputs import check_number
 from .errors import DegenerateDataError
-
-
-def _positive_integer(name, value):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)) \
-            or not np.isfinite(value) or value != int(value) or value < 1:
-        raise ValueError(f"{name} must be a positive whole number, got {value!r}")
-    return int(value)
 
 
 def f_p_value(F, df_num, df_den):
@@ -36,7 +30,7 @@ def f_p_value(F, df_num, df_den):
 
 def design_from_f_dofs(df_num, df_den):
     """Levels k = df_num + 1 and subjects n = df_den / df_num + 1 of a one-way repeated-measures F."""
-    df_num, df_den = _positive_integer("df_num", df_num), _positive_integer("df_den", df_den)
+    df_num, df_den = check_number("df_num", df_num, low=1, whole=True), check_number("df_den", df_den, low=1, whole=True)
     if df_den % df_num:
         raise ValueError(f"F({df_num}, {df_den}) is not a one-way repeated-measures design "
                          f"(df_den must be a multiple of df_num)")
@@ -116,6 +110,27 @@ TABLE_5_1_COLUMNS = ["safe_set", "interventions_in_safe_set", "interventions", "
                      "average_fp", "observed_fp_vs_standard"]
 
 
+def _table_numbers(table):
+    """Table 5.1's numeric cells indexed by safe set, checked (``TABLE_5_1_COLUMNS``, Standard and Learned rows)."""
+    missing = [c for c in TABLE_5_1_COLUMNS if c not in getattr(table, "columns", [])]
+    if missing:
+        raise ValueError(f"table must be a DataFrame with columns {TABLE_5_1_COLUMNS}; missing {missing}")
+    t = table.set_index("safe_set")
+    for name in ("Standard", "Learned"):
+        if name not in t.index:
+            raise ValueError(f"table has no row for the {name!r} safe set")
+    try:
+        numbers = t[TABLE_5_1_COLUMNS[1:]].apply(lambda col: np.asarray(col, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError("table must hold non-negative finite numbers") from None
+    if not np.isfinite(numbers.to_numpy()).all() or (numbers.to_numpy() < 0).any():
+        raise ValueError("table must hold non-negative finite numbers")
+    std = numbers.loc["Standard"]
+    if std["interventions_in_safe_set"] <= 0 or std["average_fp"] <= 0:
+        raise ValueError("the Standard row must have positive interventions in its safe set and false positives")
+    return numbers
+
+
 def table_5_1_ratios(table):
     """The arithmetic of Table 5.1 re-derived from its own cells (a DataFrame with
     ``TABLE_5_1_COLUMNS``, one row per safe set, e.g. ``data/ch5_thesis_table_5_1.csv``).
@@ -124,19 +139,8 @@ def table_5_1_ratios(table):
     those in the Standard one, and average false positives / the Standard average) and
     ``learned_half`` (the Learned share of all interventions, 1/2 in expectation at alpha = mu).
     """
-    missing = [c for c in TABLE_5_1_COLUMNS if c not in getattr(table, "columns", [])]
-    if missing:
-        raise ValueError(f"table must be a DataFrame with columns {TABLE_5_1_COLUMNS}; missing {missing}")
-    t = table.set_index("safe_set")
-    for name in ("Standard", "Learned"):
-        if name not in t.index:
-            raise ValueError(f"table has no row for the {name!r} safe set")
-    numbers = t[TABLE_5_1_COLUMNS[1:]].apply(lambda col: np.asarray(col, dtype=float))
-    if not np.isfinite(numbers.to_numpy()).all() or (numbers.to_numpy() < 0).any():
-        raise ValueError("table must hold non-negative finite numbers")
+    numbers = _table_numbers(table)
     std = numbers.loc["Standard"]
-    if std["interventions_in_safe_set"] <= 0 or std["average_fp"] <= 0:
-        raise ValueError("the Standard row must have positive interventions in its safe set and false positives")
     return {"predicted": (numbers["interventions_in_safe_set"] / std["interventions_in_safe_set"]).to_dict(),
             "observed": (numbers["average_fp"] / std["average_fp"]).to_dict(),
             "learned_half": float(numbers.loc["Learned", "interventions_in_safe_set"]
@@ -160,3 +164,70 @@ def rounding_range(means, F, df_num, df_den, decimals=2):
         corners.append(recover_from_summary(moved, F + half * signs[-1], df_num, df_den)["tukey"]["p"].to_numpy())
     corners = np.array(corners)
     return centre[["A", "B", "p"]].assign(p_low=corners.min(axis=0), p_high=corners.max(axis=0))
+
+
+def prediction_agreement(table, F, df_num, df_den, z=2.0):
+    """Whether Table 5.1's observed false positives agree with those predicted from Phase II (Sec. 5.3.3,
+    line 1030), judged from the table's own numbers and the reported F of the false-positive ANOVA.
+
+    For each safe set but Standard: the predicted ratio ``p`` (Phase II interventions in its safe set over those
+    in the Standard one) and the observed ratio ``o`` (its average false positives over Standard's). ``p`` is a
+    share of the interventions in the Standard safe set (the Learned and Conservative safe sets lie inside it:
+    the exclusion rule, a doubled obstacle), standard error ``sqrt(p (1 - p) / I_std)``; ``o`` is a ratio of level
+    means, standard error by the delta method with the repeated-measures error term recovered from F
+    (:func:`recover_from_summary`), ``sqrt(MSE / n (1 + o^2)) / mean_std``. The between-participant variance,
+    which the thesis does not report, would only widen ``o``'s spread, so this tolerance is a lower bound and
+    the check is harder to pass, not easier. They agree when ``|p - o| <= z sqrt(se_p^2 + se_o^2)`` for every
+    safe set, the predicted and observed ratios fall in the same order, and each tolerance is narrower than
+    the predicted decrease ``1 - p`` (else the check could not tell that decrease from none).
+
+    Returns ``(agree, rows)``: a bool and a DataFrame with columns safe_set, predicted, observed, se_predicted,
+    se_observed, tolerance, decrease, within.
+    """
+    if isinstance(z, bool) or not isinstance(z, (int, float, np.number)) or not (np.isfinite(z) and z > 0):
+        raise ValueError(f"z must be a positive finite number, got {z!r}")
+    numbers = _table_numbers(table)
+    std = numbers.loc["Standard"]
+    recovered = recover_from_summary(numbers["average_fp"].to_dict(), F, df_num, df_den)
+    spread = np.sqrt(recovered["mse"] / recovered["n"])
+    others = numbers.drop(index="Standard")
+    predicted = others["interventions_in_safe_set"] / std["interventions_in_safe_set"]
+    observed = others["average_fp"] / std["average_fp"]
+    if (predicted > 1).any():
+        raise ValueError("table: a safe set holds more interventions than the Standard one, which contains it")
+    rows = pd.DataFrame({"safe_set": others.index, "predicted": predicted.to_numpy(), "observed": observed.to_numpy(),
+                         "se_predicted": np.sqrt(predicted * (1 - predicted) / std["interventions_in_safe_set"]).to_numpy(),
+                         "se_observed": (spread * np.sqrt(1 + observed ** 2) / std["average_fp"]).to_numpy()})
+    rows["tolerance"] = z * np.hypot(rows["se_predicted"], rows["se_observed"])
+    rows["decrease"] = 1 - rows["predicted"]
+    rows["within"] = (rows["predicted"] - rows["observed"]).abs() <= rows["tolerance"]
+    same_order = bool(np.array_equal(np.argsort(rows["predicted"].to_numpy(), kind="stable"),
+                                     np.argsort(rows["observed"].to_numpy(), kind="stable")))
+    agree = bool(rows["within"].all() and same_order and (rows["tolerance"] < rows["decrease"]).all())
+    return agree, rows
+
+
+def arcs_against_clusters(shorter, analysed, clusters, standard_like="standard-like"):
+    """Lines 1010 and 1024 side by side: ``shorter`` of the ``analysed`` participants' Learned safe sets had
+    shorter avoidance arcs than the Conservative set, and Fig. 5.5 sorts the same sets into ``clusters``
+    (``{name: count}``). The counts fit together when the clusters hold every analysed participant and the
+    ``standard_like`` sets (arcing like the Standard set, whose arc is shorter than the Conservative one) are
+    among the shorter ones, ``standard_like <= shorter``.
+
+    Returns a dict: ``consistent``, ``not_shorter`` (``analysed - shorter``) and, per other cluster, how many
+    of its sets must still arc shorter than the Conservative set (``at_least_shorter``: its size less the sets
+    that are not shorter, at least 0).
+    """
+    counts = {"shorter": shorter, "analysed": analysed, **{f"clusters[{k!r}]": v for k, v in dict(clusters).items()}}
+    for name, n in counts.items():
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(f"{name} must be a whole number >= 0, got {n!r}")
+    if shorter > analysed:
+        raise ValueError(f"shorter ({shorter}) counts some of the analysed participants ({analysed}): at most that many")
+    clusters = dict(clusters)
+    if standard_like not in clusters:
+        raise ValueError(f"clusters has no {standard_like!r} cluster, got {sorted(clusters)}")
+    not_shorter = analysed - shorter
+    consistent = sum(clusters.values()) == analysed and clusters[standard_like] <= shorter
+    return {"consistent": bool(consistent), "not_shorter": int(not_shorter),
+            "at_least_shorter": {k: int(max(0, v - not_shorter)) for k, v in clusters.items() if k != standard_like}}

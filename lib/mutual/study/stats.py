@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .. import budget
 from .cells import cell_table
 from .data import LIKERT_RANGE
 from .errors import DegenerateDataError
@@ -104,11 +105,11 @@ class RMAnova:
         return self.mse
 
     def standard_errors(self):
-        """The standard error of each level's mean over subjects (``sd / sqrt(n)``), computed in scaled units."""
+        """The standard error of each level's mean over subjects (``sd / sqrt(n)``), each level computed in its own
+        scaled units (a huge value in one level leaves the others' digits alone)."""
         y = self.cells.to_numpy(dtype=float)
-        e = _exponent(y)
-        sd = np.ldexp(np.ldexp(y, -e).std(axis=0, ddof=1), e)
-        return {level: float(v) for level, v in zip(self.levels, sd / np.sqrt(len(y)))}
+        sd = [float(_ldexp_quiet(np.ldexp(c, -_exponent(c)).std(ddof=1), _exponent(c))) for c in y.T]
+        return {level: v / np.sqrt(len(y)) for level, v in zip(self.levels, sd)}
 
     # the names of earlier versions (statsmodels' words)
     @property
@@ -144,7 +145,7 @@ class RMAnova:
 
 def _distinct_levels(columns):
     """Refuse a wide table whose level columns repeat a name (a pair would be tested twice, or with itself)."""
-    from ..csvfile import check_names
+    from ..inputs import check_names
     seen = set()
     for name in columns:
         if name in seen:
@@ -185,7 +186,9 @@ def _anova_of_cells(wide, dv, within, subject):
     ss_subjects = float(k * np.sum((row - grand) ** 2))
     if _negligible(ss_within, y):
         what = f"every value is {raw.flat[0]:g}" if np.all(raw == raw.flat[0]) else \
-            f"every subject has one value at every level of {within!r}"
+            f"every subject has one value at every level of {within!r}" if np.all(raw == raw[:, :1]) else \
+            f"its values differ within subjects by less than 1e-13 of the largest, {np.max(np.abs(raw)):.6g}: too " \
+            "little to tell from rounding"
         raise DegenerateDataError(f"{dv!r} does not vary within subjects ({what}): the repeated-measures F is 0/0, "
                                   "so there is nothing to test")
     if _negligible(ss_error, y):
@@ -230,23 +233,30 @@ def _anova_from(data, dv, within, subject, aggregate, levels):
     return rm_anova(data, dv, within, subject, aggregate, levels)
 
 
-def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=None):
+def _check_pairs(levels, subjects, allow_large):
+    """Refuse, before any pair is tested, all pairs of more levels than the limits allow (:mod:`mutual.budget`)."""
+    budget.check(budget.anova(levels, subjects), allow_large)
+
+
+def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=None, allow_large=None):
     """All-pairs Tukey HSD with the repeated-measures error term of an :class:`RMAnova` (or of
     ``rm_anova(anova, dv, within, subject, ...)`` when given long data). Columns A, B, mean_A,
-    mean_B, diff, q, p."""
+    mean_B, diff, q, p. ``allow_large``: as :func:`mutual.budget.check` (k levels are k (k-1) / 2 pairs)."""
     res = _anova_from(anova, dv, within, subject, aggregate, levels)
+    _check_pairs(len(res.levels), res.n_subjects, allow_large)
     if res.root_mse > 0:                  # the error term's root, exact at any scale (mse may underflow)
         return tukey_from_root_mse(res.means, res.root_mse, res.n_subjects)
     return tukey_from_summary(res.means, res.mse, res.n_subjects)
 
 
-def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, levels=None):
+def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, levels=None, allow_large=None):
     """Paired t-tests between all pairs of levels, Holm-corrected.
 
     ``cells``: a subject x level table (wide), an :class:`RMAnova` (its cells), or long data with
     ``dv``, ``within`` and ``subject`` named (as :func:`rm_anova`). Returns a DataFrame with
     columns A, B, mean_diff, t, df, p, p_holm. A pair whose differences are all equal (identical
-    levels included) has no defined t: :class:`DegenerateDataError` names the pair.
+    levels included) has no defined t: :class:`DegenerateDataError` names the pair. ``allow_large``: as
+    :func:`tukey_rm`.
     """
     if isinstance(cells, RMAnova):
         wide = cells.cells
@@ -266,18 +276,21 @@ def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, lev
         raise ValueError(f"cells must be a subject x level table with >= 2 subjects and >= 2 levels, got shape {y.shape}")
     if not np.isfinite(y).all():
         raise ValueError("cells must be a complete table of finite numbers (no NaN: every subject needs every level)")
+    _check_pairs(y.shape[1], y.shape[0], allow_large)
     rows = []
-    e = _exponent(y)
-    z = np.ldexp(y, -e)                   # t is scale-free; the squares stay representable (1e-170 or 1e170)
     for (i, a), (j, b) in combinations(enumerate(wide.columns), 2):
-        d = z[:, i] - z[:, j]
-        if _negligible(float(np.sum((d - d.mean()) ** 2)), np.concatenate([z[:, i], z[:, j]])):
-            what = "identical for every subject" if _negligible(float(np.sum(d ** 2)), z[:, [i, j]]) else \
-                f"the same for every subject ({np.ldexp(d[0], e):g})"
+        e = _exponent(y[:, [i, j]])       # each pair in its own units: t is scale-free, and a huge value in another
+        z = np.ldexp(y[:, [i, j]], -e)    # level leaves this pair's digits alone (1e-170 or 1e170 alike)
+        d = z[:, 0] - z[:, 1]
+        if _negligible(float(np.sum((d - d.mean()) ** 2)), z.ravel()):
+            what = "identical for every subject" if not d.any() else \
+                f"the same for every subject ({_ldexp_quiet(d[0], e):g})" if np.all(d == d[0]) else \
+                "the same for every subject to within 1e-13 of the largest value " \
+                f"({np.max(np.abs(y[:, [i, j]])):.6g}): too little to tell from rounding"
             raise DegenerateDataError(f"levels {a!r} and {b!r}: the paired differences are {what}, so the paired t "
                                       "statistic is undefined (zero variance)")
-        res = stats.ttest_rel(z[:, i], z[:, j])
-        rows.append((a, b, float(np.ldexp(d.mean(), e)), float(res.statistic), int(res.df), float(res.pvalue)))
+        res = stats.ttest_rel(z[:, 0], z[:, 1])
+        rows.append((a, b, float(_ldexp_quiet(d.mean(), e)), float(res.statistic), int(res.df), float(res.pvalue)))
     out = pd.DataFrame(rows, columns=["A", "B", "mean_diff", "t", "df", "p"])
     out["p_holm"] = holm(out["p"].to_numpy())
     return out
@@ -296,16 +309,17 @@ def holm(p):
     return out
 
 
-def pairwise_comparisons(anova, as_records=False):
+def pairwise_comparisons(anova, as_records=False, allow_large=None):
     """Every pair of levels of an :class:`RMAnova`: the RM-error Tukey HSD (``q``, ``p_tukey``) beside the
     paired t-test with Holm's correction (``t``, ``df``, ``p_t``, ``p_holm``), one row per pair with
     ``A``, ``B``, ``mean_A``, ``mean_B`` and ``diff = mean_A - mean_B``. ``as_records=True`` returns a list
     of dicts of plain Python numbers and strings (ready for JSON). Raises :class:`DegenerateDataError` as
-    :func:`paired_t_holm` does."""
+    :func:`paired_t_holm` does, and :class:`mutual.budget.TooLarge` for more pairs than the limits allow
+    (``allow_large`` as :func:`tukey_rm`)."""
     if not isinstance(anova, RMAnova):
         raise ValueError(f"anova must be an RMAnova, got {type(anova).__name__}")
-    tukey = tukey_rm(anova).rename(columns={"p": "p_tukey"})
-    paired = paired_t_holm(anova).rename(columns={"p": "p_t"}).drop(columns="mean_diff")
+    tukey = tukey_rm(anova, allow_large=allow_large).rename(columns={"p": "p_tukey"})
+    paired = paired_t_holm(anova, allow_large=allow_large).rename(columns={"p": "p_t"}).drop(columns="mean_diff")
     table = tukey.merge(paired, on=["A", "B"], how="left")
     if not as_records:
         return table

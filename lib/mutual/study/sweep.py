@@ -1,9 +1,10 @@
-"""Monte Carlo sweeps on Dask (issue 16): the same code on 2 cores or on a cluster.
+"""Monte Carlo sweeps on Dask: the same code on 2 cores or on a cluster.
 
-:func:`run_tasks` maps a task function over task objects on a ``dask.distributed`` cluster:
+:func:`run_tasks` maps a task function over task objects with :func:`mutual.parallel.map_tasks`:
 
-* by default an embedded ``LocalCluster`` with one single-threaded worker process per core;
-* or an existing cluster reached by address: ``scheduler="tcp://host:8786"``, or the
+* by default on an embedded private cluster, one single-threaded worker process per core, that accepts
+  only this process (TLS with a throwaway certificate; :func:`mutual.parallel.private_cluster`);
+* or on an existing cluster reached by address: ``scheduler="tcp://host:8786"``, or the
   ``MUTUAL_DASK_SCHEDULER`` environment variable (start one with ``dask scheduler`` and
   ``dask worker tcp://host:8786`` on each machine, or with dask-jobqueue on SLURM: README);
 * or ``scheduler="inline"``: in this process, without Dask (a reference and for debugging).
@@ -18,62 +19,19 @@ whatever the number of workers or the order they finish in. Progress is shown wi
 """
 
 import hashlib
+import hmac
 import json
-import logging
-import os
 import time
 import warnings
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from tqdm.auto import tqdm
 
-from ..atomic import atomic_path
-from ..cache import CacheWarning, cache_folder, unusable, write_entry
+from ..cache import CacheWarning, cache_folder, secret_key, sign, unusable, usable_folder, write_entry
+from ..parallel import INLINE, SCHEDULER_ENV, dask_client, map_tasks, scheduler_address  # noqa: F401 (the sweep's words)
 
-SCHEDULER_ENV = "MUTUAL_DASK_SCHEDULER"
-INLINE = "inline"
-
-
-def scheduler_address(scheduler=None):
-    """The scheduler to use: ``scheduler`` if given, else ``$MUTUAL_DASK_SCHEDULER``, else None
-    (an embedded LocalCluster)."""
-    if scheduler is not None and not isinstance(scheduler, str):
-        raise ValueError(f"scheduler must be an address string or {INLINE!r}, got {scheduler!r}")
-    return scheduler or os.environ.get(SCHEDULER_ENV) or None
-
-
-@contextmanager
-def dask_client(scheduler=None, workers=None, timeout=30):
-    """A ``distributed.Client``: to ``scheduler`` (or ``$MUTUAL_DASK_SCHEDULER``) if given, else to an
-    embedded ``LocalCluster`` of ``workers`` single-threaded processes (default: one per core),
-    closed on exit."""
-    from dask.distributed import Client, LocalCluster
-
-    address = scheduler_address(scheduler)
-    if address == INLINE:
-        raise ValueError(f"scheduler={INLINE!r} runs without Dask: no client")
-    if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
-        raise ValueError(f"workers must be a positive integer, got {workers!r}")
-    if address:
-        client = Client(address, timeout=timeout)
-        try:
-            yield client
-        finally:
-            client.close()
-        return
-    cluster = LocalCluster(n_workers=int(workers or os.cpu_count() or 1), threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
-    client = Client(cluster, timeout=timeout)
-    try:
-        yield client
-    finally:
-        client.close()
-        cluster.close()
-
-
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2
 _COLUMN_TYPES = {"float64": (float, int), "int64": (int,), "bool": (bool,), "object": (str, type(None)),
                  "str": (str, type(None))}
 
@@ -84,8 +42,9 @@ class TaskCache:
 
     A result is a pandas DataFrame whose columns hold floats, whole numbers, booleans or text (None
     allowed); numbers are written exactly (JSON's shortest round-trip form). JSON cannot run code when
-    it is read, and :meth:`get` checks what it reads: the format, the task's key, the column names and
-    every value's type. A file that does not verify is deleted with a :class:`mutual.cache.CacheWarning`
+    it is read, and :meth:`get` checks what it reads: its HMAC under the user's secret key (no one without
+    the key can forge an entry; :mod:`mutual.cache`), the format, the task's key, the column names and
+    every value's type; a folder that others may write is not used at all. A file that does not verify is deleted with a :class:`mutual.cache.CacheWarning`
     and the task recomputed; a folder found where a file should be is removed when the result is written
     (the cache heals). A cache folder that cannot be created or written turns the cache off for the
     rest of the sweep with one warning (:mod:`mutual.cache`); the sweep goes on.
@@ -97,6 +56,14 @@ class TaskCache:
         self.version = version
         self.folder = Path(folder) if folder is not None else cache_folder("power")
         self.disabled = self.folder is None
+        self._secret = None
+
+    def _usable(self):
+        """Whether the cache may be used: its folder is this user's alone and the user's key is there (checked once)."""
+        if not self.disabled and self._secret is None:
+            self._secret = usable_folder(self.folder) and secret_key()
+            self.disabled = not self._secret
+        return not self.disabled
 
     def __repr__(self):
         return f"TaskCache({str(self.folder)!r}, version={self.version!r})"
@@ -110,7 +77,7 @@ class TaskCache:
 
     def get(self, params):
         """The cached result, or None: absent, a folder in its place, or not verifying (then deleted)."""
-        if self.disabled:
+        if not self._usable():
             return None
         path, key = self.path(params), self.key(params)
         try:
@@ -124,17 +91,27 @@ class TaskCache:
         except (OSError, UnicodeDecodeError) as err:
             return self._heal(path, f"unreadable ({type(err).__name__})")
         try:
-            return _frame_from(json.loads(text), key)
+            return _frame_from(self._authentic(json.loads(text)), key)
         except (ValueError, TypeError, KeyError, AttributeError) as err:
             return self._heal(path, str(err))
 
     def put(self, params, result):
         """Store ``result`` (a DataFrame, see the class docstring); a disk that refuses turns the cache off."""
-        if self.disabled:
+        if not self._usable():
             return
-        text = json.dumps(_frame_to(result, self.key(params), self.version, params), allow_nan=True)
+        body = _frame_to(result, self.key(params), self.version, params)
+        text = json.dumps({**body, "mac": sign(self._secret, json.dumps(body, sort_keys=True))}, allow_nan=True)
         if write_entry(self.path(params), lambda tmp: tmp.write_text(text, encoding="utf-8")) is None:
             self.disabled = True
+
+    def _authentic(self, stored):
+        """``stored`` without its "mac", when the mac is the HMAC of the rest under the user's key (else ValueError)."""
+        body = dict(stored) if isinstance(stored, dict) else {}
+        mac = body.pop("mac", None)
+        if not isinstance(mac, str) or not hmac.compare_digest(mac, sign(self._secret, json.dumps(body, sort_keys=True))):
+            raise ValueError("its authentication code does not match (changed after it was written, or written "
+                             "without your key)")
+        return body
 
     def _heal(self, path, reason):
         warnings.warn(f"power cache file {path} does not verify: {reason}; recomputing it", CacheWarning,
@@ -215,77 +192,72 @@ class SweepStats:
     task_seconds: list = field(default_factory=list, repr=False)
 
 
-def _timed(fn, task, *shared):
-    start = time.perf_counter()
-    result = fn(task, *shared)
-    return result, time.perf_counter() - start
-
-
 def run_tasks(fn, tasks, params=None, shared=(), cache=None, scheduler=None, workers=None, client=None,
-              progress=True, desc="tasks"):
+              progress=True, desc="tasks", verify=True):
     """``[fn(task, *shared) for task in tasks]`` on Dask (module docstring), in task order.
 
     ``params(task)`` gives the task's parameters as JSON-able data (default ``task.params()``), the
     cache key with ``cache.version``. ``client``: an open ``distributed.Client`` (else one is made
-    from ``scheduler`` / ``workers`` for this call). Returns ``(results, SweepStats)``.
+    from ``scheduler`` / ``workers`` for this call). ``verify``: recompute one cached result in this
+    process and compare it with the cache's (a task is cheap beside a sweep); when they differ, nothing
+    in the cache is used for this sweep. Returns ``(results, SweepStats)``.
     """
     tasks = list(tasks)
     params = params or (lambda t: t.params())
     start = time.perf_counter()
     results = [cache.get(params(t)) if cache is not None else None for t in tasks]
+    if verify and not _reproduces(fn, tasks, shared, results, params, cache):
+        results = [None] * len(tasks)
     todo = [i for i, r in enumerate(results) if r is None]
     stats = SweepStats(tasks=len(tasks), cached=len(tasks) - len(todo), computed=len(todo))
     bar = tqdm(total=len(tasks), initial=stats.cached, desc=desc, disable=not progress or None)
+    version = cache.version if cache is not None else "uncached"
 
-    def done(i, result, seconds):
-        results[i] = result
+    def done(j, timed):
+        i = todo[j]
+        results[i], seconds = timed
         stats.task_seconds.append(seconds)
         if cache is not None:
-            cache.put(params(tasks[i]), result)
+            cache.put(params(tasks[i]), results[i])
         bar.update(1)
 
+    def key(task):
+        return hashlib.sha256(json.dumps([params(task), version], sort_keys=True, default=str).encode()).hexdigest()[:24]
+
     try:
-        if todo and scheduler_address(scheduler) == INLINE and client is None:
-            stats.where, stats.workers = INLINE, 1
-            for i in todo:
-                done(i, *_timed(fn, tasks[i], *shared))
-        elif todo:
-            with (_given(client) if client is not None else dask_client(scheduler, workers)) as c:
-                _run_on(c, fn, tasks, todo, shared, params, cache, done, stats)
+        if todo:
+            _, ran = map_tasks(_Timed(fn), [tasks[i] for i in todo], shared, scheduler, workers, client, done, key)
+            stats.where, stats.workers = ran.where, ran.workers
     finally:
         bar.close()
     stats.seconds = time.perf_counter() - start
     return results, stats
 
 
-@contextmanager
-def _given(client):
-    yield client
+def _reproduces(fn, tasks, shared, results, params, cache):
+    """Whether the first cached result equals its recomputation (True when nothing came from the cache)."""
+    cached = [i for i, r in enumerate(results) if r is not None]
+    if not cached:
+        return True
+    i = cached[0]
+    again = fn(tasks[i], *shared)
+    same = again.equals(results[i]) if hasattr(again, "equals") else again == results[i]
+    if not same:
+        warnings.warn(f"power cache in {cache.folder}: the cached result of {params(tasks[i])} differs from its "
+                      "recomputation; nothing in the cache is used for this sweep", CacheWarning, stacklevel=3)
+    return bool(same)
 
 
-def _run_on(client, fn, tasks, todo, shared, params, cache, done, stats):
-    from dask.distributed import as_completed
+class _Timed:
+    """``fn`` returning ``(result, seconds)``; named as ``fn`` for the task keys."""
 
-    stats.where = str(client.scheduler.address)
-    held = client.scatter(list(shared), broadcast=True, hash=False) if shared else []
-    version = cache.version if cache is not None else "uncached"
-    futures = {}
-    for i in todo:
-        key = hashlib.sha256(json.dumps([params(tasks[i]), version], sort_keys=True, default=str).encode()).hexdigest()
-        futures[client.submit(_timed, fn, tasks[i], *held, key=f"{getattr(fn, '__name__', 'task')}-{key[:24]}",
-                              pure=False)] = i
-    for future in as_completed(futures):
-        result, seconds = future.result()
-        done(futures[future], result, seconds)
-        future.release()
-    info = client.scheduler_info(n_workers=-1) if _takes_n_workers(client) else client.scheduler_info()
-    stats.workers = len(info["workers"])  # after the run: workers of a remote cluster may join late
+    def __init__(self, fn):
+        self.fn, self.__name__ = fn, getattr(fn, "__name__", "task")
 
-
-def _takes_n_workers(client):
-    import inspect
-
-    return "n_workers" in inspect.signature(client.scheduler_info).parameters
+    def __call__(self, task, *shared):
+        start = time.perf_counter()
+        result = self.fn(task, *shared)
+        return result, time.perf_counter() - start
 
 
 def noop(task):

@@ -17,8 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..supervision.reachability import ValueFunction
-from ..supervision.supervisor import NoisySupervisor
+from ..supervision import NoisySupervisor, ValueFunction
 from .design import OBSTACLE_RADIUS
 from .teaming_batch import _candidates, _drive, _end_trips, _start_batch, _supervise
 from .value_stack import _Stack, _unique

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..supervision.dubins import TRUE_W_MAX, dubins_arc, wrap_angle
+from ..supervision import TRUE_W_MAX, dubins_arc, wrap_angle
 from .value_stack import REACH_SLACK
 
 

@@ -6,7 +6,7 @@ that a simulation evaluates only the states where it can matter."""
 
 import numpy as np
 
-from ..supervision.dubins import closed_form_dtheta, closed_form_values
+from ..supervision import closed_form_dtheta, closed_form_values
 
 REACH_SLACK = 1e-6   # metres: far above the round-off of a value or a distance, far below a grid cell
 

@@ -7,8 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dubins import SPEED, TRUE_W_MAX, _check_positive, _real, check_states, dubins_step
-from .supervisor import NoisySupervisor, _check_count, _check_rng, approach_scenes
+from ..inputs import count, positive, real
+from .dubins import SPEED, TRUE_W_MAX, check_states, dubins_step
+from .supervisor import NoisySupervisor, _check_rng, approach_scenes
 from .value_function import ValueFunction
 
 
@@ -19,7 +20,7 @@ def _check_value_fn(value_fn, name="value_fn"):
 
 
 def _check_lookahead(lookahead):
-    x = _real(lookahead)
+    x = real(lookahead)
     if x is None or not np.isfinite(x) or x < 0:
         raise ValueError(f"lookahead must be a non-negative finite number of seconds, got {lookahead!r}")
     return x
@@ -65,14 +66,14 @@ def wilson_interval(rates, n, confidence=0.95):
     false-positive rates of ``n`` robots): the error bars of the chapter 4 figures."""
     from scipy import stats
 
-    n = _check_count("n", n)
+    n = count("n", n)
     try:
         r = np.atleast_1d(np.asarray(rates, dtype=float))
     except (TypeError, ValueError):
         raise ValueError(f"rates must be fractions in [0, 1], got {rates!r}") from None
     if not np.all((r >= 0) & (r <= 1)):
         raise ValueError(f"rates must be fractions in [0, 1], got {r.tolist()}")
-    c = _real(confidence)
+    c = real(confidence)
     if c is None or not 0 < c < 1:
         raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
     ci = [stats.binomtest(int(round(x * n)), n).proportion_ci(confidence_level=c, method="wilson") for x in r]
@@ -86,7 +87,7 @@ def binomial_consistent(rates, n, expected, level=1e-4):
     fails with probability ``level`` per rate)."""
     from scipy import stats
 
-    n = _check_count("n", n)
+    n = count("n", n)
     r, p = np.broadcast_arrays(np.atleast_1d(np.asarray(rates, dtype=float)),
                                np.atleast_1d(np.asarray(expected, dtype=float)))
     if not np.all((r >= 0) & (r <= 1) & (p >= 0) & (p <= 1)):
@@ -120,9 +121,9 @@ def filter_control(value_fn, states, nominal_u, alpha, u_max=None, obstacles=Non
     if not np.all(np.isfinite(nominal)):
         raise ValueError("nominal_u contains NaN or infinite entries")
     lookahead = _check_lookahead(lookahead)
-    _check_positive("speed", speed)
+    positive("speed", speed)
     if u_max is not None:
-        _check_positive("u_max", u_max)
+        positive("u_max", u_max)
     override = v <= a
     if lookahead > 0:
         ahead = dubins_step(rel, nominal, lookahead, speed)
@@ -154,7 +155,7 @@ def safety_controller(value_fn, alpha, u_max=None, lookahead=0.0):
         raise ValueError(f"alpha must be one finite number, got {alpha!r}")
     alpha = float(_check_alpha(alpha, 1)[0])
     if u_max is not None:
-        u_max = _check_positive("u_max", u_max)
+        u_max = positive("u_max", u_max)
     return SafetyController(value_fn, alpha, u_max, _check_lookahead(lookahead))
 
 
@@ -162,9 +163,9 @@ def simulate_filtered(controller, states, nominal_u, duration, dt=0.02, speed=SP
     """Roll robots forward under ``controller`` with constant ``nominal_u``: states (T+1, n, 3)."""
     if not callable(controller):
         raise ValueError(f"controller must be callable as controller(states, nominal_u, obstacles), got {controller!r}")
-    _check_positive("duration", duration)
-    _check_positive("dt", dt)
-    _check_positive("speed", speed)
+    positive("duration", duration)
+    positive("dt", dt)
+    positive("speed", speed)
     s = check_states(states)
     path = [s]
     for _ in range(int(np.ceil(duration / dt))):
@@ -194,9 +195,9 @@ def false_positive_rates(supervisor, value_fn, alphas, n_robots, rng, start_dist
         raise ValueError(f"alphas must be a sequence of finite levels, got {alphas!r}") from None
     if len(alphas) == 0 or not np.all(np.isfinite(alphas)):
         raise ValueError(f"alphas must be a non-empty sequence of finite levels, got {alphas.tolist()}")
-    n_robots = _check_count("n_robots", n_robots)
+    n_robots = count("n_robots", n_robots)
     _check_rng(rng)
-    _check_positive("u_max", u_max)
+    positive("u_max", u_max)
     radius = value_fn.obstacle_radius
     starts = approach_scenes(n_robots, rng, radius, start_distance, dt=dt)[:, 0]
     states = np.tile(starts, (len(alphas), 1))

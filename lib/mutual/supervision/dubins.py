@@ -9,31 +9,15 @@ eq. 5.1), turn rate ``u in [-w_max, w_max]`` (``w_max = 1`` for the true robots,
 position at speed at most ``d_max`` (a Euclidean ball), playing the role of ``d`` in eq. (4.1).
 """
 
-import numbers
 
 import numpy as np
 
 from ..dubins import SPEED, TRUE_W_MAX, arc as dubins_arc, avoid_value as closed_form_values, wrap_angle
+from ..inputs import positive, real
 
 __all__ = ["SPEED", "TRUE_W_MAX", "avoid_value_closed_form", "check_states", "closed_form_dtheta",
            "closed_form_values", "dubins_arc", "dubins_step", "keep_out_margin", "rotate_to_heading", "unsafe_reach",
            "wrap_angle"]
-
-
-def _real(value):
-    """``value`` as a float if it is a real number (a 0-d array counts), else None."""
-    if isinstance(value, np.ndarray) and value.ndim == 0:
-        value = value.item()
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        return None
-    return float(value)
-
-
-def _check_positive(name, value):
-    x = _real(value)
-    if x is None or not np.isfinite(x) or x <= 0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return x
 
 
 def check_states(states, name="states"):
@@ -53,7 +37,7 @@ def check_states(states, name="states"):
 
 def keep_out_margin(states, radius):
     """The payoff ``l(x) = |p| - r`` of eq. (4.3): negative inside the disk K, positive outside."""
-    _check_positive("radius", radius)
+    positive("radius", radius)
     try:
         s = np.asarray(states, dtype=float)
     except (TypeError, ValueError):
@@ -67,9 +51,9 @@ def keep_out_margin(states, radius):
 
 def unsafe_reach(w_max, radius, speed=SPEED):
     """How far ahead of the obstacle centre the unsafe set reaches: ``sqrt(2 R r + r^2)``, ``R = v / w_max``."""
-    _check_positive("w_max", w_max)
-    _check_positive("radius", radius)
-    _check_positive("speed", speed)
+    positive("w_max", w_max)
+    positive("radius", radius)
+    positive("speed", speed)
     if radius < 1e150 and speed / w_max < 1e150:
         return float(np.sqrt(2 * speed / w_max * radius + radius ** 2))
     with np.errstate(over="ignore"):     # sqrt(r) sqrt(2 R + r): no overflow of r^2 (or inf) for huge radii
@@ -77,11 +61,10 @@ def unsafe_reach(w_max, radius, speed=SPEED):
 
 
 def avoid_value_closed_form(states, w_max, radius, speed=SPEED, tol=1e-9):
-    """The exact avoid value ``V(x)`` of eq. (4.3) for a disk and no disturbance (:func:`mutual.dubins.avoid_value`
-    on checked inputs)."""
-    _check_positive("w_max", w_max)
-    _check_positive("radius", radius)
-    _check_positive("speed", speed)
+    """The exact avoid value ``V(x)`` of eq. (4.3) for a disk and no disturbance (module docstring)."""
+    positive("w_max", w_max)
+    positive("radius", radius)
+    positive("speed", speed)
     s = check_states(states)
     return closed_form_values(s[:, 0], s[:, 1], s[:, 2], speed / w_max, radius, tol)
 
@@ -95,7 +78,7 @@ def closed_form_dtheta(x, y, theta, turn_radius, radius, step=1e-6):
 def rotate_to_heading(states, heading=0.0):
     """Rotate states about the obstacle centre so each faces ``heading``; V is invariant (a disk is round)."""
     s = check_states(states)
-    angle = _real(heading)
+    angle = real(heading)
     if angle is None or not np.isfinite(angle):
         raise ValueError(f"heading must be a finite angle (rad), got {heading!r}")
     heading = angle
@@ -108,8 +91,8 @@ def dubins_step(states, controls, dt, speed=SPEED):
     """Integrate eq. (5.1) exactly over ``dt`` with constant turn rates ``controls`` (vectorised over cars;
     :func:`mutual.dubins.arc` on checked inputs)."""
     s = check_states(states)
-    _check_positive("dt", dt)
-    _check_positive("speed", speed)
+    positive("dt", dt)
+    positive("speed", speed)
     try:
         u = np.broadcast_to(np.asarray(controls, dtype=float), (len(s),))
     except (TypeError, ValueError):

@@ -1,5 +1,5 @@
 """Exact values where a closed form exists: the Dubins avoid value of a disk without disturbance,
-evaluated at the states themselves rather than interpolated from a grid (issue 20: our numerics are
+evaluated at the states themselves rather than interpolated from a grid (so that our numerics are
 never the thesis's fault), and the grid's error measured against it.
 
 :class:`ExactValueFunction` has the interface of :class:`~mutual.supervision.value_function.ValueFunction`
@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dubins import _check_positive, check_states, closed_form_dtheta, closed_form_values
-from .value_function import FULL_GRID, GridSpec, ValueFunction, ValueLibrary
+from ..inputs import positive
+from .dubins import check_states, closed_form_dtheta, closed_form_values
+from .value_function import FULL_GRID, GridSpec, ValueFunction, ValueLibrary, trilinear
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -47,12 +48,12 @@ def exact_value_function(w_max, radius, grid_spec=FULL_GRID, speed=None):
     """The exact value function of the Dubins car with turn rate ``w_max`` around a disk of ``radius``."""
     from .dubins import SPEED
 
-    speed = SPEED if speed is None else _check_positive("speed", speed)
+    speed = SPEED if speed is None else positive("speed", speed)
     if not isinstance(grid_spec, GridSpec):
         raise ValueError(f"grid_spec must be a GridSpec, got {type(grid_spec).__name__}")
     nodes = grid_spec.nodes
-    values = closed_form_values(nodes[:, 0], nodes[:, 1], nodes[:, 2], speed / _check_positive("w_max", w_max),
-                                _check_positive("radius", radius)).reshape(grid_spec.shape)
+    values = closed_form_values(nodes[:, 0], nodes[:, 1], nodes[:, 2], speed / positive("w_max", w_max),
+                                positive("radius", radius)).reshape(grid_spec.shape)
     return ExactValueFunction(float(w_max), float(radius), grid_spec, values, speed=speed, method="closed-form")
 
 
@@ -93,18 +94,6 @@ def grid_error(value_fn, states, exact=None):
 def interpolated_closed_form(grid_spec, states, turn_radius, radius):
     """The closed form sampled at the grid's nodes around each state and interpolated trilinearly (as a grid
     value function would be): its difference from the exact value is the grid's interpolation error alone."""
-    s = check_states(states)
-    nx, ny, nt = grid_spec.shape
-    pos = (s - grid_spec.lo) / grid_spec.spacings
-    ix = np.clip(np.floor(pos[:, 0]).astype(int), 0, nx - 2)
-    iy = np.clip(np.floor(pos[:, 1]).astype(int), 0, ny - 2)
-    it = np.floor(pos[:, 2]).astype(int)
-    wx, wy, wt = pos[:, 0] - ix, pos[:, 1] - iy, pos[:, 2] - it
     xs, ys, ts = grid_spec.coordinate_vectors
-    out = 0.0
-    for dx, fx in ((0, 1 - wx), (1, wx)):
-        for dy, fy in ((0, 1 - wy), (1, wy)):
-            for dt, ft in ((0, 1 - wt), (1, wt)):
-                node = closed_form_values(xs[ix + dx], ys[iy + dy], ts[(it + dt) % nt], turn_radius, radius)
-                out = out + fx * fy * ft * node
-    return out
+    return trilinear(grid_spec, check_states(states),
+                     lambda ix, iy, it: closed_form_values(xs[ix], ys[iy], ts[it], turn_radius, radius))

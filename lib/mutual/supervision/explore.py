@@ -19,7 +19,8 @@ from matplotlib.patches import Circle
 from scipy import stats
 
 from ..style import PALETTE
-from .dubins import _real, rotate_to_heading
+from ..inputs import check_number
+from .dubins import rotate_to_heading
 from .fit import LibraryEdgeWarning, fit_supervisor
 from .reachability import avoid_value_function, value_library
 from .supervisor import NoisySupervisor, collect_interventions
@@ -42,13 +43,6 @@ def _supervisor_value(w_max):
     return avoid_value_function(w_max, RADIUS, EXPLORE_GRID, method="closed-form")
 
 
-def _number(name, value, low, high):
-    x = _real(value)
-    if x is None or not np.isfinite(x) or not low <= x <= high:
-        raise ValueError(f"{name} must be a number in [{low:g}, {high:g}], got {value!r}")
-    return x
-
-
 def safe_set_summary(w_max=0.75, mu=0.5, sigma=0.1, alpha=0.7, n_interventions=40, seed=0):
     """The numbers :func:`safe_set_view` draws: the simulated interventions, the fit and what ``alpha`` avoids.
 
@@ -56,11 +50,11 @@ def safe_set_summary(w_max=0.75, mu=0.5, sigma=0.1, alpha=0.7, n_interventions=4
     ``values`` (the learned V at the interventions), ``avoided`` (bool per intervention: at or below
     ``alpha``, so robots avoiding at ``alpha`` keep clear of it) and ``expected`` (``Phi((alpha - mu*) / sigma*)``).
     """
-    w_max = round(_number("w_max", w_max, 0.25, 3.0), 6)
-    mu = _number("mu", mu, -1.0, 3.0)
-    sigma = _number("sigma", sigma, 0.0, 2.0)
-    alpha = _number("alpha", alpha, -1.0, 5.0)
-    n = int(_number("n_interventions", n_interventions, 2, 2000))
+    w_max = round(check_number("w_max", w_max, 0.25, 3.0), 6)
+    mu = check_number("mu", mu, -1.0, 3.0)
+    sigma = check_number("sigma", sigma, 0.0, 2.0)
+    alpha = check_number("alpha", alpha, -1.0, 5.0)
+    n = int(check_number("n_interventions", n_interventions, 2, 2000))
     if n != n_interventions:
         raise ValueError(f"n_interventions must be an integer, got {n_interventions!r}")
     supervisor = NoisySupervisor(_supervisor_value(w_max), mu, sigma)

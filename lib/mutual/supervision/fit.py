@@ -11,7 +11,8 @@ import pandas as pd
 
 from ..seeds import generator
 from .control import wilson_interval
-from .dubins import TRUE_W_MAX, _check_positive, _real, check_states, closed_form_values
+from ..inputs import positive, real
+from .dubins import TRUE_W_MAX, check_states, closed_form_values
 from .exact import exact_counterpart, has_closed_form, interpolated_closed_form
 from .supervisor import NoisySupervisor, collect_interventions
 from .value_function import ValueFunction, ValueLibrary, unsafe_set_contains
@@ -87,7 +88,7 @@ class SupervisorFit:
 
     def level(self, k=2.0):
         """The control level ``alpha = mu + k sigma`` of Sec. 4.5."""
-        k_value = _real(k)
+        k_value = real(k)
         if k_value is None or not np.isfinite(k_value):
             raise ValueError(f"k must be a finite number, got {k!r}")
         return self.mu + k_value * self.sigma
@@ -110,7 +111,7 @@ def expected_coverage(k, p):
     the share is 1/2 + 1/2 I_{k^2 / (p - 1)}(1/2, (p - 2) / 2) for k >= 0; Phi(k) as p grows."""
     from scipy import stats
 
-    k_value, p_value = _real(k), _real(p)
+    k_value, p_value = real(k), real(p)
     if k_value is None or not np.isfinite(k_value) or k_value < 0:
         raise ValueError(f"k must be a finite number >= 0, got {k!r}")
     if p_value is None or p_value != int(p_value) or p_value < 3:
@@ -323,7 +324,7 @@ def recovery_study(library, generators, n_values, seeds, start_distance, prior="
     seeds = list(seeds)
     if not seeds:
         raise ValueError("seeds must hold at least one seed")
-    _check_positive("start_distance", start_distance)
+    positive("start_distance", start_distance)
     rows = []
     exact = _evaluation(library, "auto") == "exact"
     for w_max, mu, sigma in generators:

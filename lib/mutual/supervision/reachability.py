@@ -27,10 +27,11 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from .. import __version__
+from .. import __version__, budget
 from ..dubins import DubinsCar, avoid_value
+from ..inputs import positive, real
 from . import value_cache, value_function
-from .dubins import SPEED, _check_positive, _real, unsafe_reach
+from .dubins import SPEED, unsafe_reach
 from .value_function import (FULL_GRID, METHODS, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary,  # noqa: F401
                              unsafe_set_contains)
 
@@ -51,7 +52,7 @@ class SolverSpec:
         if self.accuracy not in ACCURACIES:
             raise ValueError(f"accuracy must be one of {ACCURACIES}, got {self.accuracy!r}")
         for name in ("chunk_time", "tolerance", "max_time"):
-            _check_positive(name, getattr(self, name))
+            positive(name, getattr(self, name))
 
 
 @functools.lru_cache(maxsize=None)
@@ -170,9 +171,9 @@ def _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_ma
         raise ValueError(f"w_maxes must be a non-empty 1-D sequence of positive finite numbers, got {w_maxes!r}")
     if len(np.unique(w)) != len(w):
         raise ValueError(f"w_maxes must not repeat values, got {w.tolist()}")
-    _check_positive("obstacle_radius", obstacle_radius)
-    _check_positive("speed", speed)
-    if _real(d_max) is None or not np.isfinite(_real(d_max)) or d_max < 0:
+    positive("obstacle_radius", obstacle_radius)
+    positive("speed", speed)
+    if real(d_max) is None or not np.isfinite(real(d_max)) or d_max < 0:
         raise ValueError(f"d_max must be a non-negative finite number, got {d_max!r}")
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -192,14 +193,14 @@ def _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_ma
 def closed_form_values(w_max, obstacle_radius, grid_spec, speed=SPEED, tol=1e-9):
     """The exact avoid value of eq. (4.3) (no disturbance) at every node of ``grid_spec``, float32:
     :func:`mutual.dubins.avoid_value` broadcast over the grid's axes (x, y, theta)."""
-    big_r = _check_positive("speed", speed) / _check_positive("w_max", w_max)
-    radius = _check_positive("obstacle_radius", obstacle_radius)
+    big_r = positive("speed", speed) / positive("w_max", w_max)
+    radius = positive("obstacle_radius", obstacle_radius)
     xs, ys, ts = grid_spec.coordinate_vectors
     return avoid_value(xs[:, None, None], ys[None, :, None], ts[None, None, :], big_r, radius, tol).astype(np.float32)
 
 
 def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSpec(), speed=SPEED, d_max=0.0,
-                  batch="loop", cache=True, progress=True, method="hj"):
+                  batch="loop", cache=True, progress=True, method="hj", allow_large=None):
     """Converged avoid value functions of eq. (4.3) for each ``w_max`` (Fig. 4.2, the library of eq. 4.12).
 
     ``method="hj"`` (default; the thesis's method, Sec. 5.2.1): hj-reachability, one compiled solver
@@ -210,8 +211,13 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
     ``method="closed-form"``: the exact value of :func:`~mutual.supervision.dubins.avoid_value_closed_form`
     at the grid nodes, for trying things out (no solver, no cache; the whole library in about a
     second). Only without a disturbance: ``d_max > 0`` is refused (the HJI solver is the only method then).
+
+    ``allow_large``: as :func:`mutual.budget.check`: the library's memory is checked before anything is
+    loaded, and the time of the members to compute before any is solved.
     """
     w = _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_max, batch, method)
+    budget.check(budget.value_library(len(w), grid_spec.shape, len(w) if method == "closed-form" else 0, method),
+                 allow_large)
     if method == "closed-form":
         members = tuple(ValueFunction(float(wi), float(obstacle_radius), grid_spec,
                                       closed_form_values(wi, obstacle_radius, grid_spec, speed), float(speed), 0.0,
@@ -227,6 +233,7 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
             if stored is not None:
                 found[wi] = stored
     missing = [wi for wi in w if wi not in found]
+    budget.check(budget.value_library(len(w), grid_spec.shape, len(missing), method), allow_large)
     if missing:
         for wi, v, h in _converge(missing, obstacle_radius, speed, d_max, grid_spec, solver, batch, progress):
             found[wi] = (v, h)
@@ -240,7 +247,7 @@ def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSp
 def avoid_value_function(w_max, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSpec(), speed=SPEED, d_max=0.0,
                          cache=True, progress=True, method="hj"):
     """The converged avoid value function V of eq. (4.3) for one Dubins car (see ``value_library``)."""
-    if _real(w_max) is None:
+    if real(w_max) is None:
         raise ValueError(f"w_max must be a positive finite number, got {w_max!r}")
     return value_library([w_max], obstacle_radius, grid_spec, solver, speed, d_max, cache=cache,
                          progress=progress, method=method)[0]
@@ -255,7 +262,7 @@ def value_drift(value_fn, extra_time, solver=SolverSpec()):
     """
     if not isinstance(value_fn, ValueFunction) or value_fn.method != "hj":
         raise ValueError("value_fn must be a ValueFunction computed with method='hj'")
-    _check_positive("extra_time", extra_time)
+    positive("extra_time", extra_time)
     if not isinstance(solver, SolverSpec):
         raise ValueError(f"solver must be a SolverSpec, got {type(solver).__name__}")
     stepper = _chunk_stepper(value_fn.grid_spec, solver.accuracy, False)
@@ -281,7 +288,7 @@ def closed_form_agreement(library, near_cells=2.0):
         raise ValueError("library must be a ValueLibrary computed with method='hj'")
     if library.members[0].d_max > 0:
         raise ValueError("the closed form has no disturbance: library must have d_max = 0")
-    _check_positive("near_cells", near_cells)
+    positive("near_cells", near_cells)
     spec, dx = library.grid_spec, library.grid_spec.spacings[0]
     rows = []
     for vf in library:

@@ -19,7 +19,6 @@ obstacle_y     float   (optional, default 0)
 =============  ======  =========================================================================
 """
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,8 +26,8 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_path
-from ..csvfile import check_names
-from .dubins import SPEED, _check_positive, _real, check_states, wrap_angle
+from ..inputs import angle_unit_warning, count, name_column, number_column, place, positive, read_csv, real, warn
+from .dubins import SPEED, check_states, wrap_angle
 from .value_function import ValueFunction
 
 REQUIRED_COLUMNS = ("participant", "trial", "time", "x", "y", "theta")
@@ -42,14 +41,6 @@ def _check_rng(rng):
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {rng!r}")
     return rng
-
-
-def _check_count(name, n, minimum=1):
-    """``n`` as an int if it is a whole number >= ``minimum`` (``40.0`` counts), else a ValueError."""
-    x = _real(n)
-    if x is None or not np.isfinite(x) or x != int(x) or x < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {n!r}")
-    return int(x)
 
 
 # ---------------------------------------------------------------------------- Sec. 4.3: the supervisor
@@ -67,7 +58,7 @@ class NoisySupervisor:
     def __post_init__(self):
         if not isinstance(self.value_fn, ValueFunction):
             raise ValueError("value_fn must be a mutual.supervision.ValueFunction")
-        mu, sigma = _real(self.mu), _real(self.sigma)
+        mu, sigma = real(self.mu), real(self.sigma)
         if mu is None or not np.isfinite(mu):
             raise ValueError(f"mu must be a finite number, got {self.mu!r}")
         if sigma is None or not np.isfinite(sigma) or sigma < 0:
@@ -82,7 +73,7 @@ class NoisySupervisor:
 
     def thresholds(self, n, rng):
         """``n`` judgement levels ``mu - w`` (intervene when ``V_S(x) <= level``)."""
-        n = _check_count("n", n, minimum=0)
+        n = count("n", n, low=0)
         return self.mu - self.sigma * _check_rng(rng).standard_normal(n)
 
     def intervenes(self, states, rng=None, thresholds=None):
@@ -142,9 +133,9 @@ def collect_interventions(supervisor, n, rng, start_distance, dt=0.02, batch=Non
     """
     if not isinstance(supervisor, NoisySupervisor):
         raise ValueError("supervisor must be a mutual.supervision.NoisySupervisor")
-    n = _check_count("n", n)
-    batch = 2 * n if batch is None else _check_count("batch", batch)
-    max_scenes = 50 * n if max_scenes is None else _check_count("max_scenes", max_scenes)
+    n = count("n", n)
+    batch = 2 * n if batch is None else count("batch", batch)
+    max_scenes = 50 * n if max_scenes is None else count("max_scenes", max_scenes)
     states, watched = np.empty((0, 3)), 0
     while len(states) < n:
         if watched >= max_scenes:
@@ -165,12 +156,12 @@ def approach_scenes(n, rng, obstacle_radius, start_distance, speed=SPEED, dt=0.0
     uniformly within 0.9 of the obstacle radius sideways of the centre; returns (n, T, 3) states
     sampled every ``dt`` until the car would reach the centre's distance.
     """
-    n = _check_count("n", n)
+    n = count("n", n)
     _check_rng(rng)
-    _check_positive("obstacle_radius", obstacle_radius)
-    _check_positive("start_distance", start_distance)
-    _check_positive("speed", speed)
-    _check_positive("dt", dt)
+    positive("obstacle_radius", obstacle_radius)
+    positive("start_distance", start_distance)
+    positive("speed", speed)
+    positive("dt", dt)
     if start_distance <= obstacle_radius:
         raise ValueError(f"start_distance={start_distance} must exceed obstacle_radius={obstacle_radius}")
     bearing = rng.uniform(-np.pi, np.pi, n)
@@ -186,80 +177,50 @@ def approach_scenes(n, rng, obstacle_radius, start_distance, speed=SPEED, dt=0.0
 
 # ---------------------------------------------------------------------------- the interventions CSV
 
-def _row(frame, i, source):
-    """How to point a reader at positional row ``i``: the file's row and line, or the frame's index label."""
-    if source is not None:
-        lines = frame.attrs.get("lines")
-        line = lines[i] if lines is not None else i + 2
-        return f"row {i + 1} (line {line} of the file)"
-    return f"row {frame.index[i]!r}"
-
-
-def _cell_text(value):
-    if isinstance(value, float) and np.isnan(value):
-        return ""
-    return str(value).strip()
-
-
-def _numbers(frame, col, source, where):
-    """Column ``col`` as finite floats, or a ValueError naming the first bad row and its text."""
-    raw = frame[col]
-    texts = raw.map(_cell_text) if raw.dtype == object else raw
-    values = pd.to_numeric(texts, errors="coerce").to_numpy(dtype=float)
-    bad = np.flatnonzero(~np.isfinite(values))
-    if len(bad):
-        i = bad[0]
-        text = _cell_text(raw.iloc[i])
-        reason = "is empty" if text == "" else f"{text!r} is not a finite number"
-        more = f" ({len(bad) - 1} more rows like it)" if len(bad) > 1 else ""
-        raise ValueError(f"{where}{_row(frame, i, source)}, column {col!r}: {reason}{more}")
-    return values
+def _named(frame, source):
+    """``frame`` named for :func:`mutual.inputs.place`: by its file and lines if read from a file, else ``source``."""
+    if frame.attrs.get("source") is None:
+        frame = frame.copy()
+        frame.attrs["name"] = str(source) if source is not None else "interventions"
+    return frame
 
 
 def validate_interventions(frame, source=None):
     """Check an interventions table (module docstring) and return a clean copy (types, wrapped theta).
 
-    Errors name the table (``source``, e.g. the CSV's path), the row and the column.
+    Errors name the table -- its file and line for a table read by :func:`read_interventions`, else
+    ``source`` (default "interventions") and the row label -- and the column. Headings that look like
+    degrees (values far beyond a turn) are warned about (:func:`mutual.inputs.angle_unit_warning`).
     """
-    where = f"{source}: " if source is not None else "interventions: "
     if not isinstance(frame, pd.DataFrame):
-        raise ValueError(f"{where}interventions must be a pandas DataFrame, got {type(frame).__name__}")
-    columns = [str(c) for c in frame.columns]
+        raise ValueError(f"{source or 'interventions'}: interventions must be a pandas DataFrame, got "
+                         f"{type(frame).__name__}")
+    frame = _named(frame.set_axis([str(c) for c in frame.columns], axis=1), source)
+    columns = list(frame.columns)
+    where = place(frame)
     missing = [c for c in REQUIRED_COLUMNS if c not in columns]
     if missing:
-        raise ValueError(f"{where}missing column{'s' if len(missing) > 1 else ''} {', '.join(map(repr, missing))} "
+        raise ValueError(f"{where}: missing column{'s' if len(missing) > 1 else ''} {', '.join(map(repr, missing))} "
                          f"(required: {', '.join(REQUIRED_COLUMNS)}; optional: {', '.join(OPTIONAL_COLUMNS)})")
     extra = [c for c in columns if c not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
     if extra:
-        raise ValueError(f"{where}unknown column{'s' if len(extra) > 1 else ''} {', '.join(map(repr, extra))} "
+        raise ValueError(f"{where}: unknown column{'s' if len(extra) > 1 else ''} {', '.join(map(repr, extra))} "
                          f"(allowed: {', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)})")
     if len(set(columns)) != len(columns):
-        raise ValueError(f"{where}repeated column names {columns}")
-    lines = frame.attrs.get("lines")
-    frame = frame.set_axis(columns, axis=1)
-    frame.attrs["lines"] = lines
+        raise ValueError(f"{where}: repeated column names {columns}")
     if len(frame) == 0:
-        raise ValueError(f"{where}holds no interventions (a header but no rows)")
-    check_names(frame["participant"].tolist(), "participant", where.rstrip(": "), row=lambda i: _row(frame, i, source))
-    participant = frame["participant"].map(_cell_text)
-    empty = np.flatnonzero(participant.to_numpy() == "")
-    if len(empty):
-        raise ValueError(f"{where}{_row(frame, empty[0], source)}, column 'participant': is empty")
-    out = pd.DataFrame({"participant": participant.to_numpy()})
-    trial = _numbers(frame, "trial", source, where)
-    bad = np.flatnonzero((trial < 0) | (trial != np.round(trial)))
-    if len(bad):
-        raise ValueError(f"{where}{_row(frame, bad[0], source)}, column 'trial': {trial[bad[0]]:g} is not a "
-                         "non-negative integer")
-    out["trial"] = trial.astype(int)
-    for col in ("time", "x", "y", "theta") + OPTIONAL_COLUMNS:
-        out[col] = _numbers(frame, col, source, where) if col in frame else 0.0
-    bad = np.flatnonzero(out["time"].to_numpy() < 0)
-    if len(bad):
-        raise ValueError(f"{where}{_row(frame, bad[0], source)}, column 'time': {out['time'].iloc[bad[0]]:g} is "
-                         "negative (seconds since the scene started)")
+        raise ValueError(f"{where}: holds no interventions (a header but no rows)")
+    out = pd.DataFrame({"participant": name_column(frame, "participant")}, index=frame.index)
+    out["trial"] = number_column(frame, "trial", whole=True, low=0, what="a non-negative integer").astype(int)
+    out["time"] = number_column(frame, "time", low=0, what="a non-negative number of seconds (since the scene "
+                                                            "started)")
+    for col in ("x", "y", "theta") + OPTIONAL_COLUMNS:
+        out[col] = number_column(frame, col) if col in frame else 0.0
+    unit = angle_unit_warning(out["theta"].to_numpy(), f"{where}, column 'theta' (the heading, radians)")
+    if unit:
+        warn(unit)
     out["theta"] = _wrap(out["theta"])
-    out.attrs["lines"] = lines
+    out.attrs.update({k: frame.attrs[k] for k in ("source", "lines", "name") if k in frame.attrs})
     return out
 
 
@@ -267,7 +228,6 @@ def check_inside(frame, half_width, source=None):
     """Refuse an interventions table (as :func:`validate_interventions` returns it) with a row outside
     the value functions' grid, ``|x - obstacle_x|, |y - obstacle_y| <= half_width``: the error names
     the first such row, its line of the file and its position as the file writes it."""
-    where = f"{source}: " if source is not None else "interventions: "
     dx, dy = (frame["x"] - frame["obstacle_x"]).to_numpy(), (frame["y"] - frame["obstacle_y"]).to_numpy()
     outside = np.flatnonzero(np.maximum(np.abs(dx), np.abs(dy)) > half_width)
     if len(outside):
@@ -277,34 +237,17 @@ def check_inside(frame, half_width, source=None):
         centre = f" around the obstacle at ({row['obstacle_x']:g}, {row['obstacle_y']:g})" if (
             row["obstacle_x"] or row["obstacle_y"]) else ""
         more = f" ({len(outside) - 1} more rows like it)" if len(outside) > 1 else ""
-        raise ValueError(f"{where}{_row(frame, i, source)}: the intervention at {at} lies outside the value "
-                         f"functions' grid, |x - obstacle_x|, |y - obstacle_y| <= {half_width:g}{centre}{more}")
+        raise ValueError(f"{place(_named(frame, source), frame.index[i])}: the intervention at {at} lies outside the "
+                         f"value functions' grid, |x - obstacle_x|, |y - obstacle_y| <= {half_width:g}{centre}{more}")
 
 
 def read_interventions(path):
-    """Read and validate an interventions CSV (module docstring); errors name the file, row and column."""
+    """Read and validate an interventions CSV (module docstring; :func:`mutual.inputs.read_csv`); errors name
+    the file, the line and the column."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such interventions file")
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            reader = csv.reader(handle, skipinitialspace=True)
-            rows = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
-    except UnicodeDecodeError as err:
-        raise ValueError(f"{path}: not a text CSV file ({err.reason} at byte {err.start})") from None
-    except csv.Error as err:
-        raise ValueError(f"{path}: not a well-formed CSV ({err})") from None
-    if not rows:
-        raise ValueError(f"{path}: the file is empty (expected a header line: {','.join(REQUIRED_COLUMNS)})")
-    (_, header), body = rows[0], rows[1:]
-    header = [name.strip() for name in header]
-    for line, row in body:
-        if len(row) != len(header):
-            raise ValueError(f"{path}: not a well-formed CSV (line {line} has {len(row)} fields, the header "
-                             f"has {len(header)})")
-    frame = pd.DataFrame([row for _, row in body], columns=header, dtype=object)
-    frame.attrs["lines"] = [line for line, _ in body]
-    return validate_interventions(frame, source=path)
+    return validate_interventions(read_csv(path))
 
 
 def write_interventions(frame, path):

@@ -3,8 +3,8 @@
 One ``.npz`` file per library member, named by a key that hashes everything that makes the
 member's values: dynamics, obstacle, grid, solver settings, package versions and the solver's own
 code (:func:`~.reachability.solver_code_version`). Each file stores the ``values``, the
-``horizon``, its ``key``, the parameters that made it (``params``, JSON) and a SHA-256
-``checksum`` of all of them; it is written atomically as soon as its member converges, so that an
+``horizon``, its ``key``, the parameters that made it (``params``, JSON) and a ``checksum`` of all of
+them: an HMAC-SHA256 under the user's secret key (:func:`mutual.cache.sign`, :func:`mutual.cache.secret_key`); it is written atomically as soon as its member converges, so that an
 interrupted library build keeps its finished members. Files hold arrays and text only and are
 read with ``allow_pickle=False``: nothing in the cache runs when it is loaded.
 
@@ -14,13 +14,14 @@ shape, finite values, a matching checksum, and pass the caller's plausibility ch
 themselves (:func:`~.reachability.value_library` compares the head-on reach of the unsafe set with
 the closed form). A file that does not verify is reported with a :class:`CacheWarning` naming its
 path and the reason, and the caller recomputes and overwrites it: a damaged cache heals instead of
-crashing every run. The checksum guards against damage and mix-ups, not against someone who may
-write the cache folder and recomputes it; the plausibility check catches another member's values
-even then. A cache that cannot be used at all (read-only, full, no home folder, a folder where a
+crashing every run. The checksum guards against damage, mix-ups and forgery: no one without the key (another
+user, a copied cache) can make an entry that verifies, and no one else may write the cache folder at all
+(:func:`mutual.cache.insecure`); the plausibility check would catch another member's values even then. A cache that cannot be used at all (read-only, full, no home folder, a folder where a
 file should be that cannot be removed) leaves the run going without it (:mod:`mutual.cache`).
 """
 
 import hashlib
+import hmac
 import json
 import warnings
 import zipfile
@@ -28,9 +29,9 @@ import zlib
 
 import numpy as np
 
-from ..cache import CacheWarning, cache_dir, cache_folder, clear_entry, write_entry
+from ..cache import CacheWarning, cache_dir, cache_folder, clear_entry, secret_key, sign, write_entry
 
-CACHE_FORMAT = 3
+CACHE_FORMAT = 4
 FIELDS = {"values": "f", "horizon": "f", "key": "U", "params": "U", "checksum": "U"}   # name: numpy dtype kind
 FOLDER = "reachability"
 
@@ -60,12 +61,13 @@ def cache_file(key):
     return cache_dir() / FOLDER / f"avoid-{key}.npz"
 
 
-def _checksum(key, values, horizon, params_text=""):
-    digest = hashlib.sha256(key.encode())
-    digest.update(np.ascontiguousarray(values, dtype=np.float32).tobytes())
-    digest.update(np.float64(horizon).tobytes())
-    digest.update(params_text.encode())
-    return digest.hexdigest()
+def _checksum(key, values, horizon, params_text="", secret=None):
+    """The HMAC of a member's fields under the user's key (``secret``, default :func:`mutual.cache.secret_key`)."""
+    secret = secret_key() if secret is None else secret
+    if secret is None:
+        raise ValueError("no key to authenticate it with (the cache cannot be used)")
+    return sign(secret, key, np.ascontiguousarray(values, dtype=np.float32).tobytes(), np.float64(horizon).tobytes(),
+                params_text)
 
 
 def save_member(key, values, horizon, params):
@@ -75,7 +77,7 @@ def save_member(key, values, horizon, params):
     if not np.all(np.isfinite(values)) or not np.isfinite(horizon):
         raise ValueError(f"refusing to cache a member with non-finite values or horizon (key {key})")
     text = _params_text(params)
-    if cache_folder(FOLDER) is None:
+    if cache_folder(FOLDER) is None or secret_key() is None:
         return None
 
     def write(tmp):
@@ -124,8 +126,8 @@ def _verify(path, key, shape, params, check):
         raise ValueError(f"values have shape {values.shape} and dtype {values.dtype}, expected {tuple(shape)} float32")
     if not np.all(np.isfinite(values)) or not np.isfinite(horizon):
         raise ValueError(f"{int(np.sum(~np.isfinite(values)))} values are NaN or infinite")
-    if _checksum(key, values, horizon, text) != checksum:
-        raise ValueError("checksum mismatch (the file was corrupted after it was written)")
+    if not hmac.compare_digest(_checksum(key, values, horizon, text), checksum):
+        raise ValueError("checksum mismatch (the file was changed after it was written, or written without your key)")
     if check is not None:
         check(values)
     return values, horizon
@@ -141,6 +143,8 @@ def load_member(key, shape, params, check=None):
             return None
     except OSError:   # no home folder: save_member reports it once
         return None
+    if cache_folder(FOLDER, writable=False) is None or secret_key() is None:
+        return None    # others may write the cache, or no key: nothing in it is trusted
     if path.is_dir() or path.is_symlink():
         if clear_entry(path):
             warnings.warn(f"value-function cache entry {path} was a folder or a link, not a file; removed it "

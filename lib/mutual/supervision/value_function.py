@@ -13,16 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .dubins import SPEED, _check_positive, _real, check_states
+from ..inputs import finite, positive, real
+from .dubins import SPEED, check_states
 
 METHODS = ("hj", "closed-form")
-
-
-def _check_finite(name, value):
-    x = _real(value)
-    if x is None or not np.isfinite(x):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-    return x
 
 
 def _fmt(x):
@@ -36,7 +30,7 @@ class GridSpec:
     shape: tuple = (101, 101, 64)
 
     def __post_init__(self):
-        _check_positive("half_width", self.half_width)
+        positive("half_width", self.half_width)
         if isinstance(self.shape, (str, bytes)) or not hasattr(self.shape, "__len__"):
             raise ValueError(f"shape must be three integers >= 5 (nx, ny, ntheta), got {self.shape!r}")
         shape = tuple(self.shape)
@@ -113,10 +107,10 @@ class ValueFunction:
     def __post_init__(self):
         if not isinstance(self.grid_spec, GridSpec):
             raise ValueError(f"grid_spec must be a GridSpec, got {type(self.grid_spec).__name__}")
-        _check_positive("w_max", self.w_max)
-        _check_positive("obstacle_radius", self.obstacle_radius)
-        _check_positive("speed", self.speed)
-        if _real(self.d_max) is None or not np.isfinite(_real(self.d_max)) or self.d_max < 0:
+        positive("w_max", self.w_max)
+        positive("obstacle_radius", self.obstacle_radius)
+        positive("speed", self.speed)
+        if real(self.d_max) is None or not np.isfinite(real(self.d_max)) or self.d_max < 0:
             raise ValueError(f"d_max must be a non-negative finite number, got {self.d_max!r}")
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
@@ -155,16 +149,16 @@ class ValueFunction:
         ``u_max`` defaults to this model's ``w_max``; a robot whose true turn rate differs passes its own.
         """
         u_max = self.w_max if u_max is None else u_max
-        _check_positive("u_max", u_max)
+        positive("u_max", u_max)
         return np.where(self.interp_dtheta(states, fill_value=0.0) >= 0, u_max, -u_max)
 
     def safe_set(self, level=0.0):
         """Boolean grid of the safe set at ``level``, ``{x : V(x) >= level}`` (Omega at level 0)."""
-        return self.values >= _check_finite("level", level)
+        return self.values >= finite("level", level)
 
     def theta_slice(self, theta, resolution=201):
         """``(xs, ys, V)`` on a regular (x, y) mesh at heading ``theta`` (V indexed [y, x], for contour plots)."""
-        theta = _check_finite("theta", theta)
+        theta = finite("theta", theta)
         if isinstance(resolution, bool) or not isinstance(resolution, numbers.Integral) or resolution < 2:
             raise ValueError(f"resolution must be an integer >= 2, got {resolution!r}")
         w = self.grid_spec.half_width
@@ -179,7 +173,7 @@ class ValueFunction:
 
         For the Dubins car without disturbance at ``level = 0`` this is ``sqrt(2 R r + r^2)``, ``R = v / w_max``.
         """
-        level = _check_finite("level", level)
+        level = finite("level", level)
         xs, _, _ = self.grid_spec.coordinate_vectors
         ahead = xs <= 0
         states = np.stack([xs[ahead], np.zeros(ahead.sum()), np.zeros(ahead.sum())], axis=1)
@@ -194,11 +188,12 @@ class ValueFunction:
         return float(-(x0 + (x1 - x0) * v0 / (v0 - v1)))
 
 
-def _interpolate(spec, flat_values, states, fill_value):
-    """Trilinear interpolation of each row of ``flat_values`` (b, nx*ny*nt) at ``states`` -> (b, n)."""
-    s = check_states(states)
+def trilinear(spec, states, node_values):
+    """Trilinear interpolation on the grid ``spec`` at ``states`` (n, 3) (checked), periodic in theta: the
+    eight nodes around each state weighted by their distances, ``node_values(ix, iy, it)`` giving the values
+    at nodes (index arrays of n). Outside the (x, y) domain it extrapolates from the border cells."""
     nx, ny, nt = spec.shape
-    pos = (s - spec.lo) / spec.spacings
+    pos = (states - spec.lo) / spec.spacings
     ix = np.clip(np.floor(pos[:, 0]).astype(int), 0, nx - 2)
     iy = np.clip(np.floor(pos[:, 1]).astype(int), 0, ny - 2)
     it = np.floor(pos[:, 2]).astype(int)
@@ -207,8 +202,16 @@ def _interpolate(spec, flat_values, states, fill_value):
     result = 0.0
     for dx, fx in ((0, 1 - wx), (1, wx)):
         for dy, fy in ((0, 1 - wy), (1, wy)):
-            base = ((ix + dx) * ny + iy + dy) * nt
-            result = result + fx * fy * ((1 - wt) * flat_values[:, base + it0] + wt * flat_values[:, base + it1])
+            result = result + fx * fy * ((1 - wt) * node_values(ix + dx, iy + dy, it0)
+                                         + wt * node_values(ix + dx, iy + dy, it1))
+    return result
+
+
+def _interpolate(spec, flat_values, states, fill_value):
+    """Trilinear interpolation of each row of ``flat_values`` (b, nx*ny*nt) at ``states`` -> (b, n)."""
+    s = check_states(states)
+    _, ny, nt = spec.shape
+    result = trilinear(spec, s, lambda ix, iy, it: flat_values[:, (ix * ny + iy) * nt + it])
     inside = np.all(np.abs(s[:, :2]) <= spec.half_width, axis=1)
     return np.where(inside, result, fill_value)
 
@@ -272,7 +275,7 @@ class ValueLibrary:
 
     def index_of(self, w_max):
         """Index of the member with this ``w_max`` (ValueError if none within 1e-9)."""
-        w_max = _check_finite("w_max", w_max)
+        w_max = finite("w_max", w_max)
         i = int(np.argmin(np.abs(self.w_maxes - w_max)))
         if abs(self.w_maxes[i] - w_max) > 1e-9:
             raise ValueError(f"w_max={w_max!r} is not in the library {self.w_maxes.tolist()}")
@@ -290,6 +293,26 @@ class ValueLibrary:
         return _interpolate(self.grid_spec, self.flat_values, states, fill_value)
 
 
+def boundary_values(value_fn, n_points=36, n_headings=72):
+    """V on the boundary of the keep-out disk, ``|p| = r`` (line 862: the zero level set and the boundary of H),
+    at ``n_points`` positions around it and ``n_headings`` headings at each: ``(values, approaching)``, arrays of
+    shape (n_points, n_headings) from ``value_fn.interp`` (exact for an exact value function). ``approaching``
+    marks the headings that point into the disk (``p . h < 0``); the headings sit half a step off the tangents,
+    so none is exactly tangent."""
+    if not isinstance(value_fn, ValueFunction):
+        raise ValueError(f"value_fn must be a ValueFunction, got {type(value_fn).__name__}")
+    for name, n in (("n_points", n_points), ("n_headings", n_headings)):
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 2:
+            raise ValueError(f"{name} must be an integer >= 2, got {n!r}")
+    around = 2 * np.pi * np.arange(n_points) / n_points
+    offset = np.tile(2 * np.pi * (np.arange(n_headings) + 0.5) / n_headings, n_points)  # from the outward normal
+    position = np.repeat(around, n_headings)
+    r = value_fn.obstacle_radius
+    states = np.stack([r * np.cos(position), r * np.sin(position), np.remainder(position + offset + np.pi, 2 * np.pi) - np.pi], 1)
+    shape = (n_points, n_headings)
+    return value_fn.interp(states).reshape(shape), (np.cos(offset) < 0).reshape(shape)
+
+
 def unsafe_set_contains(outer, inner, level=0.0):
     """Whether ``{V_inner < 0}`` lies inside ``{V_outer < level}`` at every grid node.
 
@@ -299,7 +322,7 @@ def unsafe_set_contains(outer, inner, level=0.0):
     """
     if not isinstance(outer, ValueFunction) or not isinstance(inner, ValueFunction):
         raise ValueError("outer and inner must both be mutual.supervision.ValueFunction")
-    level = _check_finite("level", level)
+    level = finite("level", level)
     if outer.grid_spec != inner.grid_spec:
         raise ValueError("outer and inner must share one grid_spec")
     return bool(np.all(outer.values[inner.values < 0] < level))

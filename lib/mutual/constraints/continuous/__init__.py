@@ -8,32 +8,47 @@ chance thresholds and greedy inference:
 * :mod:`.systems` -- continuous dynamics x' = f(x, u): named systems and your own ``module:function``;
 * :mod:`.grid`, :mod:`.problem`, :mod:`.systemfile` -- the box and its cells, the controls, the
   task, the tabular MDP, and the system TOML file that describes them;
-* :mod:`.discretization`, :mod:`.cluster` -- S(x, a, x') by Monte Carlo within cells or by
+* :mod:`.discretization` -- S(x, a, x') by Monte Carlo within cells or by
   Kuhn-triangulation interpolation, in chunks that run in one process or on Dask;
 * :mod:`.recordings`, :mod:`.mapping` -- recorded trajectories (CSV), aligned to the time step and
   mapped to cells and actions (controls inferred where they were not recorded);
 * :mod:`.regions`, :mod:`.candidates`, :mod:`.thresholds` -- bounds, disks, boxes and cells as
   chance constraints with their maximum-likelihood thresholds (eq. 3.3, Lemma 3.2.1);
-* :mod:`.inference`, :mod:`.refine` -- the greedy inference in the constraints' units, and
-  refinement of the grid near an inferred boundary;
+* :mod:`.pointwise`, :mod:`.evidence`, :mod:`.search`, :mod:`.inference` -- the default: the exact
+  likelihood of continuous demonstrations of a deterministic system (Z on the grid, point by point),
+  candidates as continuous parameters (the tightest consistent bound, the largest consistent obstacle),
+  greedy inference with a stop rule on the exact gain and a likelihood interval per constraint;
+* :mod:`.cells`, :mod:`.refine` -- chapters 2-3's greedy inference on the discretized MDP itself
+  (``infer(..., model="cells")``), and refinement of its grid near an inferred boundary;
 * :mod:`.demonstrators` -- demonstrators on the TRUE continuous system (fine-grid soft-optimal, MPPI);
 * :mod:`.experiments`, :mod:`.soft_hjb`, :mod:`.plots` -- notebook 09's measurements and figures.
 """
 
+from ...lazy import lazy_names
 from .candidates import RegionCandidates, bound_regions, box_regions, disk_regions, region_candidates
 from .demonstrators import mppi_rollouts, rollout, soft_demonstrator, starts_around
 from .discretization import discretize
 from .grid import Grid
+from .cells import CellInference, infer_cells
 from .inference import ContinuousInference, boundary_errors, infer
-from .mapping import to_demonstrations
+from .mapping import check_recording, to_demonstrations
+from .pointwise import PointModel, point_model
 from .problem import Problem, QuadraticReward
 from .recordings import Recording, read_recording, write_recording
 from .regions import Bound, Box, Disk, boundary_distance, parse_region
-from .systemfile import load_system, system_from_mapping
+from .systemfile import check_start, load_system, system_from_mapping
 from .systems import SYSTEMS, System, integrate, named_system
 
-__all__ = ["SYSTEMS", "Bound", "Box", "ContinuousInference", "Disk", "Grid", "Problem", "QuadraticReward", "Recording",
-           "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors", "box_regions",
-           "discretize", "disk_regions", "infer", "integrate", "load_system", "mppi_rollouts", "named_system",
-           "parse_region", "read_recording", "region_candidates", "rollout", "soft_demonstrator", "starts_around",
-           "system_from_mapping", "to_demonstrations", "write_recording"]
+__all__ = ["SYSTEMS", "Bound", "Box", "CellInference", "ContinuousInference", "Disk", "Grid", "PointModel", "Problem", "QuadraticReward",
+           "Recording", "RegionCandidates", "System", "bound_regions", "boundary_distance", "boundary_errors",
+           "box_regions", "check_recording", "check_start", "convergence", "demos_sweep", "discretize",
+           "disk_regions", "inference_figure", "infer", "infer_cells", "integrate", "load_system", "mppi_rollouts", "named_system",
+           "parse_region", "point_model", "read_recording", "refinement", "region_candidates", "resolution_sweep", "rollout",
+           "soft_demonstrator", "starts_around", "summary", "system_from_mapping", "timed_inference",
+           "to_demonstrations", "with_cells", "write_recording"]
+
+# notebook 09's measurements, the refinement, the soft HJB check and the figure, imported on first use
+__getattr__ = lazy_names(__name__, {
+    "with_cells": "experiments", "summary": "experiments", "resolution_sweep": "experiments",
+    "demos_sweep": "experiments", "timed_inference": "experiments", "refinement": "refine",
+    "convergence": "soft_hjb", "inference_figure": "plots"})

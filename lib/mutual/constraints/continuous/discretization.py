@@ -13,7 +13,7 @@ Two schemes (``Problem.scheme``):
 
 Every row of S sums to 1 and S is a sparse (X*A, X) matrix. The cells are cut into fixed
 chunks of ``CHUNK_CELLS``; each chunk is one task, seeded by (``seed``, chunk number), so the
-result is the same in one process or on a Dask cluster of any size (:func:`discretize`, :mod:`.cluster`).
+result is the same in one process or on a Dask cluster of any size (:func:`discretize`, :mod:`mutual.parallel`).
 """
 
 from dataclasses import dataclass
@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .cluster import map_tasks
+from ... import budget
+from ...parallel import INLINE, map_tasks
 
 CHUNK_CELLS = 2048
 #: integrations (cells x controls x samples) above which ``scheduler="auto"`` uses Dask
@@ -125,22 +126,24 @@ def work(problem):
     return problem.grid.n_cells * problem.n_actions * points
 
 
-def discretize(problem, scheduler="auto", workers=None, progress=False):
+def discretize(problem, scheduler="auto", workers=None, progress=False, allow_large=None):
     """S(x, a, x') of ``problem`` as a CSR matrix (X*A, X) (module docstring).
 
     ``scheduler``: "inline" (this process), "auto" (inline for small problems -- fewer than
     ``DASK_THRESHOLD`` integrations -- else as below), None (Dask: ``$MUTUAL_DASK_SCHEDULER`` or
-    an embedded LocalCluster of ``workers`` processes) or the address of a running Dask scheduler.
-    The result does not depend on where it ran (the chunks and their seeds are fixed).
+    an embedded private cluster of ``workers`` processes; :mod:`mutual.parallel`) or the address of a running
+    Dask scheduler. The result does not depend on where it ran (the chunks and their seeds are fixed).
+    ``allow_large``: as :func:`mutual.budget.check` (memory and time estimated before any integration).
+    ``progress``: a tqdm bar when True, or a function ``progress(done, total)`` called as chunks finish.
     """
+    budget.check(budget.discretization(problem.grid.shape, problem.n_actions, problem.samples, problem.scheme,
+                                       problem.substeps), allow_large)
     tasks = chunks(problem.grid.n_cells)
     if scheduler == "auto":
-        scheduler = "inline" if work(problem) < DASK_THRESHOLD or len(tasks) < 2 else None
-    if scheduler == "inline":
-        parts = [chunk_transitions(task, problem) for task in _progress(tasks, progress)]
-    else:
-        parts = map_tasks(chunk_transitions, tasks, shared=(problem,), scheduler=scheduler, workers=workers,
-                          progress=progress, desc="discretizing")
+        scheduler = INLINE if work(problem) < DASK_THRESHOLD or len(tasks) < 2 else None
+    bar = _progress(len(tasks), progress)
+    parts, _ = map_tasks(chunk_transitions, tasks, (problem,), scheduler, workers, on_result=lambda i, part: bar.update(1))
+    bar.close()
     rows, cols, probs = (np.concatenate(p) for p in zip(*parts))
     X, A = problem.grid.n_cells, problem.n_actions
     S = sp.csr_matrix((probs, (rows, cols)), shape=(X * A, X))
@@ -149,8 +152,23 @@ def discretize(problem, scheduler="auto", workers=None, progress=False):
     return sp.csr_matrix(sp.diags(1.0 / sums) @ S)   # exact row sums (rounding in the weights)
 
 
-def _progress(tasks, progress):
-    if not progress:
-        return tasks
+def _progress(total, progress):
+    """A tqdm bar (``progress`` True), or a counter that calls ``progress(done, total)`` (a function)."""
+    if callable(progress):
+        return _Counter(total, progress)
     from tqdm.auto import tqdm
-    return tqdm(tasks, desc="discretizing")
+    return tqdm(total=total, desc="discretizing", disable=not progress)
+
+
+class _Counter:
+    """Counts finished chunks and reports ``(done, total)``."""
+
+    def __init__(self, total, report):
+        self.total, self.report, self.done = total, report, 0
+
+    def update(self, n):
+        self.done += n
+        self.report(self.done, self.total)
+
+    def close(self):
+        pass

@@ -5,6 +5,8 @@
 * :func:`demos_sweep` -- boundary error against the number of demonstrations (several draws);
 * :func:`robustness` -- one row per hyperparameter variant (resolution, time step, control set,
   temperature, scheme, samples, thresholds);
+* :func:`seeded_runs`, :func:`claim_verdict` -- a claim checked over seeds and settings against the truth
+  and the naive bound (the tightest bound the recordings allow), with a verdict by CLAIMS.md's rules;
 * :func:`measured` -- a run's wall time and peak memory in a fresh process (no timings reach the
   notebook's saved results: they vary from run to run).
 """
@@ -89,18 +91,23 @@ def _expected_successor(S, grid, reference):
 
 
 def summary(run, truth):
-    """One row about an inference against the ``truth`` regions: the chosen constraints, F of the first,
-    whether the first is of the truth's kind and on its coordinates, the boundary error(s)
-    (:func:`.inference.boundary_errors`), thresholds Lemma 3.2.1 raised, steps S gave probability 0."""
+    """One row about an inference (either model) against the ``truth`` regions: the chosen constraints, F
+    of the first, whether the first is of the truth's kind and on its coordinates, the boundary error(s)
+    (:func:`.inference.boundary_errors`); the points model adds the first one's likelihood interval, the
+    cells model the thresholds Lemma 3.2.1 raised and the steps S gave probability 0."""
     errors = boundary_errors(run, truth)
     regions = run.chosen_regions()
     first = regions[0] if regions else None
     first_error = boundary_distance(first, truth[0]) if first is not None and truth else math.nan
-    return {"chosen": "; ".join(run.candidates.label(k) for k in run.result.chosen) or "none",
-            "F of the first": float(run.result.F[0]) if regions else math.nan,
-            "first is the true kind": bool(np.isfinite(first_error)),
-            **{("error" if len(truth) == 1 else f"error {n}"): e for n, e in enumerate(errors)},
-            "thresholds raised": run.candidates.raised, "zero-probability steps": run.mapped.added}
+    row = {"chosen": "; ".join(run.labels()) or "none",
+           "first is the true kind": bool(np.isfinite(first_error)),
+           **{("error" if len(truth) == 1 else f"error {n}"): e for n, e in enumerate(errors)}}
+    if hasattr(run, "candidates"):
+        return {**row, "F of the first": float(run.result.F[0]) if regions else math.nan,
+                "thresholds raised": run.candidates.raised, "zero-probability steps": run.mapped.added}
+    interval = run.accepted[0]["interval"] if regions else (math.nan, math.nan)
+    return {**row, "F of the first": math.exp(-run.accepted[0]["gain"] / run.data.n) if regions else math.nan,
+            "interval of the first": f"[{interval[0]:.4g}, {interval[1]:.4g}]" if regions else "none"}
 
 
 def resolution_sweep(problem, recording, resolutions, truth, schemes=("sample", "barycentric"), **options):
@@ -151,6 +158,59 @@ def robustness(problem, recording, variants, truth, **options):
     return pd.DataFrame(rows)
 
 
+def naive_bound(recording, truth):
+    """The one-line baseline: the recordings' extreme value on a true bound's coordinate and side."""
+    values = np.concatenate([np.asarray(s, dtype=float)[:, truth.dim] for s in recording.states])
+    return float(values.max() if truth.side == "upper" else values.min())
+
+
+def judged(run, recording, truth, tolerance=0.05, obstacle_tolerance=0.1):
+    """One run against one true region: the first accepted constraint, whether it is the truth's kind on
+    its coordinates (and side), its error in the truth's units; for a bound also the naive bound's error and
+    whether ours is within ``tolerance`` of it; for an obstacle whether centre and size are each within
+    ``obstacle_tolerance``; ``ok``: all of these."""
+    regions = run.chosen_regions()
+    first = regions[0] if regions else None
+    error = boundary_distance(first, truth) if first is not None else math.nan
+    row = {"first": first.describe(run.problem.grid) if first is not None else "none", "right kind": bool(np.isfinite(error)),
+           "error": error}
+    if truth.kind == "bound":
+        naive = abs(naive_bound(recording, truth) - truth.value)
+        row.update({"naive error": naive, "ok": bool(np.isfinite(error) and error <= naive + tolerance)})
+    else:
+        centre = float(np.hypot(*np.subtract(first.center, truth.center))) if row["right kind"] else math.nan
+        size = abs(first.radius - truth.radius) if row["right kind"] else math.nan
+        row.update({"centre error": centre, "size error": size,
+                    "ok": bool(row["right kind"] and centre <= obstacle_tolerance and size <= obstacle_tolerance)})
+    if regions and hasattr(run, "accepted"):
+        low, high = run.accepted[0]["interval"]
+        value = truth.value if truth.kind == "bound" else truth.radius
+        row["interval covers truth"] = bool(row["right kind"] and low <= value <= high)
+    return row
+
+
+def seeded_runs(problem, make_recording, seeds, truth, setting="", **options):
+    """:func:`judged` rows of ``infer`` on ``make_recording(seed)`` for each seed (``options`` to infer)."""
+    rows = []
+    for seed in seeds:
+        recording = make_recording(seed)
+        rows.append({"setting": setting, "seed": seed, **judged(infer(problem, recording, **options), recording, truth)})
+    return pd.DataFrame(rows)
+
+
+def claim_verdict(table, by="setting", holds=0.9):
+    """A verdict from per-seed outcomes (column ``ok``) per setting (CLAIMS.md rule 2): "reproduced" when
+    every setting succeeds in at least ``holds`` of its seeds, "differs" when every setting fails in at
+    least that share, "undetermined" otherwise; with the success share per setting as text."""
+    share = table.groupby(by, sort=False)["ok"].mean()
+    shares = "; ".join(f"{k}: {v:.0%}" for k, v in share.items())
+    if (share >= holds).all():
+        return "reproduced", shares
+    if (share <= 1 - holds).all():
+        return "differs", shares
+    return "undetermined", shares
+
+
 def _child(fn, args, kwargs, queue):
     start = time.perf_counter()
     result = fn(*args, **kwargs)
@@ -183,8 +243,9 @@ def timed_inference(problem, recording, truth=(), **options):
     ``truth``."""
     import mutual  # noqa: F401  (the XLA setting, as in the parent)
     run = infer(problem, recording, **options)
+    scored = len(run.candidates) if hasattr(run, "candidates") else sum(len(t) for t in run.rounds)
     return {"cells": problem.grid.n_cells, **{f"{k} s": v for k, v in run.seconds.items()},
-            "candidates": len(run.candidates), **summary(run, list(truth)), "regions": run.chosen_regions()}
+            "candidates": scored, **summary(run, list(truth)), "regions": run.chosen_regions()}
 
 
 def idle_memory(fresh=True):

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..demonstrations import Demonstrations
-from .recordings import align
+from .recordings import align, check_plausible
 
 SUPPORT_WEIGHT = 1e-3
 
@@ -106,10 +106,12 @@ def _with_support(transitions, rows, cols, n_actions):
 
 
 def check_recording(problem, recording, truncate=False):
-    """Align ``recording`` to the time step and check its states lie in the box (the errors of
-    :func:`to_demonstrations` that need no discretization, for an early report)."""
-    states, _, index = align(recording, problem.dt, truncate)
+    """Align ``recording`` to the time step and check its states lie in the box and are plausible
+    (:func:`.recordings.check_plausible`): the errors of :func:`to_demonstrations` that need no
+    discretization, for an early report."""
+    states, controls, index = align(recording, problem.dt, truncate)
     check_box(problem.grid, recording, states, index)
+    check_plausible(problem, recording, states, controls, index)
 
 
 def to_demonstrations(problem, recording, transitions, truncate=False):
@@ -117,6 +119,7 @@ def to_demonstrations(problem, recording, transitions, truncate=False):
     discretized dynamics are ``transitions`` (module docstring)."""
     states, controls, index = align(recording, problem.dt, truncate)
     check_box(problem.grid, recording, states, index)
+    check_plausible(problem, recording, states, controls, index)
     N, L1, n = states.shape
     grid = problem.grid
     flat = grid.wrap(states.reshape(-1, n))

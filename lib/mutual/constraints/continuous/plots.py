@@ -59,19 +59,43 @@ def _patch(kind, anchor, size, color, fill, label):
 
 
 def phase_panel(ax, grid, states, dims=(0, 1), truth=(), inferred=(), title=None):
-    """Demonstrations in the plane of ``dims`` with the true (red, filled) and inferred (blue) regions."""
+    """Demonstrations in the plane of ``dims`` with the true (red, filled) and inferred (blue) regions,
+    each inferred region labelled with its round (1, 2, ...); equal aspect when both coordinates share a
+    unit (a disk is drawn as a disk)."""
     ax.set_xlim(grid.low[dims[0]], grid.high[dims[0]])
     ax.set_ylim(grid.low[dims[1]], grid.high[dims[1]])
+    if grid.units[dims[0]] == grid.units[dims[1]]:
+        ax.set_aspect("equal", adjustable="box")
     draw_trajectories(ax, grid, states, dims)
     for n, region in enumerate(truth):
         draw_region(ax, region, dims, TRUE, "true constraint" if n == 0 else None)
-    drawn = [draw_region(ax, region, dims, INFERRED, "inferred" if n == 0 else None, fill=False)
-             for n, region in enumerate(r for r in inferred if r is not None)]
+    drawn = []
+    for number, region in enumerate(inferred, start=1):
+        if region is None:
+            continue
+        shown = draw_region(ax, region, dims, INFERRED, "inferred (round)" if not drawn else None, fill=False)
+        if shown:
+            label_round(ax, region, dims, number)
+        drawn.append(shown)
     ax.set_xlabel(_axis(grid, dims[0]))
     ax.set_ylabel(_axis(grid, dims[1]))
     if title:
         ax.set_title(title, fontsize=9)
     return any(drawn)
+
+
+def label_round(ax, region, dims, number):
+    """The round number beside an inferred region: at a bound's line, at an obstacle's centre."""
+    style = dict(color=INFERRED, fontsize=8, fontweight="bold", ha="center", va="center",
+                 bbox=dict(boxstyle="circle,pad=0.15", fc="white", ec=INFERRED, lw=0.8))
+    if isinstance(region, Bound):
+        lo, hi = (ax.get_ylim() if region.dim == dims[0] else ax.get_xlim())
+        at = lo + (0.92 - 0.1 * ((number - 1) % 8)) * (hi - lo)
+        xy = (region.value, at) if region.dim == dims[0] else (at, region.value)
+    else:
+        xy = tuple(region.center) if isinstance(region, Disk) else \
+            (0.5 * (region.low[0] + region.high[0]), 0.5 * (region.low[1] + region.high[1]))
+    ax.annotate(str(number), xy, **style)
 
 
 def _axis(grid, i):
@@ -87,21 +111,27 @@ def panels(grid):
     return pairs
 
 
-def inference_figure(inference, truth=(), title=None):
-    """A figure of an inference (:class:`~.inference.ContinuousInference`): the demonstrations in every
-    pair of coordinates with the inferred (and, if given, the true) regions; chosen cells shaded."""
+def inference_figure(inference, truth=(), title=None, width=110):
+    """A figure of an inference (:class:`~.inference.ContinuousInference` or :class:`~.cells.CellInference`):
+    the demonstrations in every pair of coordinates with the inferred regions labelled by round (and, if
+    given, the true ones); chosen cells shaded; the title lists the rounds, wrapped at ``width`` characters."""
+    import textwrap
+
     import matplotlib.pyplot as plt
-    grid, states = inference.problem.grid, inference.mapped.states
+    grid, states = inference.problem.grid, inference.states
     pairs = panels(grid)
-    fig, axes = plt.subplots(1, len(pairs), figsize=(3.6 * len(pairs) + 0.4, 3.4), squeeze=False)
+    fig, axes = plt.subplots(1, len(pairs), figsize=(3.8 * len(pairs) + 0.6, 3.8), squeeze=False)
+    regions = inference.chosen_regions()
     for ax, dims in zip(axes[0], pairs):
-        phase_panel(ax, grid, states, dims, truth, inference.chosen_regions())
-        if grid.ndim == 2:
+        phase_panel(ax, grid, states, dims, truth, regions)
+        if grid.ndim == 2 and hasattr(inference, "candidates"):
             shade_cells(ax, grid, [int(inference.candidates.candidates.index[k]) for k in inference.result.chosen
                                    if inference.candidates.regions[k] is None])
-    axes[0][0].legend(fontsize=7, loc="best")
-    chosen = "; ".join(f"{n}: {inference.candidates.label(k)}" for n, k in enumerate(inference.result.chosen, 1))
-    fig.suptitle(title or f"inferred, by round: {chosen or 'none'}", fontsize=8)
+    if axes[0][0].get_legend_handles_labels()[0]:
+        axes[0][0].legend(fontsize=7, loc="best")
+    chosen = "; ".join(f"{n}: {label}" for n, label in enumerate(inference.labels(), 1))
+    text = title or f"inferred, by round: {chosen or 'none'}"
+    fig.suptitle("\n".join(textwrap.wrap(text, width)), fontsize=8)
     fig.tight_layout()
     return fig
 

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ...atomic import atomic_path
+from ...inputs import angle_unit_warning, name_column, number_column, read_csv, warn
 
 _TOLERANCE = 1e-6   # relative: equal sampling periods, a period dividing dt
 
@@ -73,49 +74,24 @@ def write_recording(path, recording, state_names, control_names=None):
     return path
 
 
-def _number_column(df, column, path, allow_empty=False):
-    raw = df[column].fillna("").str.strip()
-    values = pd.to_numeric(raw.where(raw != "", None), errors="coerce").to_numpy(dtype=float)
-    bad = (raw != "").to_numpy() & ~np.isfinite(values)
-    if not allow_empty:
-        bad |= (raw == "").to_numpy()
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        what = "empty" if raw.iloc[i] == "" else f"{df[column].iloc[i]!r} is not a finite number"
-        raise ValueError(f"{path}, line {i + 2}, column {column!r}: {what}")
-    return values
-
-
 def read_recording(path, state_names, control_names=()):
-    """Read trajectory CSV (module docstring); every problem raises a ValueError naming the file,
-    the line (1 = the header) and the column."""
-    try:
-        df = pd.read_csv(path, dtype=str, keep_default_na=False, na_values=[""], encoding="utf-8-sig")
-    except pd.errors.EmptyDataError:
-        raise ValueError(f"{path}: the file is empty; expected a header demo,t,{','.join(state_names)}") from None
-    except UnicodeDecodeError as err:
-        raise ValueError(f"{path}: not a text file (not UTF-8: byte {err.start})") from None
-    missing = [c for c in ("demo", "t", *state_names) if c not in df.columns]
-    if missing:
-        raise ValueError(f"{path}, line 1: missing column {missing[0]!r}; expected demo, t, {', '.join(state_names)}"
-                         f"{' and optionally ' + ', '.join(control_names) if control_names else ''}")
-    if df.empty:
-        raise ValueError(f"{path}: no rows after the header")
-    ids = df["demo"].fillna("").str.strip()
-    if (ids == "").any():
-        raise ValueError(f"{path}, line {int(np.flatnonzero(ids == '')[0]) + 2}, column 'demo': empty")
-    t = _number_column(df, "t", path)
-    states = np.stack([_number_column(df, c, path) for c in state_names], axis=1)
-    present = [c for c in control_names if c in df.columns]
+    """Read trajectory CSV (module docstring; :func:`mutual.inputs.read_csv`); every problem raises a
+    ValueError naming the file, the line (1 = the header) and the column. Demonstration names that differ
+    only by surrounding spaces are refused as ambiguous."""
+    frame = read_csv(path, ("demo", "t", *state_names))
+    ids = name_column(frame, "demo").to_numpy()
+    t = number_column(frame, "t")
+    states = np.stack([number_column(frame, c) for c in state_names], axis=1)
+    present = [c for c in control_names if c in frame.columns]
     if present and len(present) != len(control_names):
         raise ValueError(f"{path}, line 1: has control column {present[0]!r} but not "
                          f"{[c for c in control_names if c not in present][0]!r}; give all controls or none")
-    controls = np.stack([_number_column(df, c, path, True) for c in control_names], axis=1) if present else None
-    line = np.arange(len(df)) + 2
+    controls = np.stack([number_column(frame, c, True) for c in control_names], axis=1) if present else None
+    line = np.asarray(frame.attrs["lines"])
     out = {"ids": [], "times": [], "states": [], "controls": [], "lines": []}
-    for ident in dict.fromkeys(ids):                       # in order of first appearance
-        rows = np.flatnonzero((ids == ident).to_numpy())
-        rows = rows[np.argsort(t[rows], kind="stable")]
+    codes, names = pd.factorize(ids)                       # in order of first appearance
+    order = np.lexsort((t, codes))                         # by demonstration, then by t (ties as in the file)
+    for ident, rows in zip(names, np.split(order, np.flatnonzero(np.diff(codes[order])) + 1)):
         if rows.size < 2:
             raise ValueError(f"{path}, line {line[rows[0]]}, column 'demo': demonstration {ident!r} has one row; "
                              "a demonstration needs at least two samples")
@@ -184,3 +160,79 @@ def _step_controls(C, picks, k, L):
         if len(window):
             out[i] = window.mean(axis=0)
     return out
+
+
+def check_plausible(problem, recording, states, controls, index):
+    """What a user gets wrong in recordings that still read, for the aligned ``states`` (N, L+1, n), ``controls``
+    (N, L, m) or None and sample ``index`` of :func:`align`: demonstrations longer than the horizon and time that
+    runs backwards are refused; angles that look like degrees and recorded controls far outside the control set
+    are warned about (:class:`mutual.inputs.InputWarning`)."""
+    L = states.shape[1] - 1
+    if L > problem.horizon:
+        raise ValueError(f"{recording.where(0, index[0, -1], 't')}: the demonstrations span {L} steps of dt = "
+                         f"{problem.dt:g} s, more than the horizon T = {problem.horizon} of the system ([time] "
+                         f"horizon); raise the horizon to at least {L}, or trim the recordings")
+    grid = problem.grid
+    for i in np.flatnonzero(grid.periodic):
+        message = angle_unit_warning([s[:, i] for s in recording.states], f"{recording.source}, column "
+                                     f"{grid.names[i]!r} (periodic, radians)", grid.low[i], grid.high[i],
+                                     times=recording.times)
+        if message:
+            warn(message)
+    if recording.controls is not None:
+        _check_control_range(problem, recording)
+    _check_time_direction(problem, recording, states)
+
+
+def _check_control_range(problem, recording):
+    """Warn about recorded controls more than the control set's width outside it (each is snapped to its edge)."""
+    names = problem.system.control_names
+    for j, name in enumerate(names):
+        lo, hi = problem.controls[:, j].min(), problem.controls[:, j].max()
+        width = hi - lo if hi > lo else max(abs(lo), 1.0)
+        far = [np.flatnonzero((c[:, j] < lo - width) | (c[:, j] > hi + width)) for c in recording.controls]
+        count = sum(f.size for f in far)
+        if count:
+            d = next(k for k, f in enumerate(far) if f.size)
+            total = sum(int(np.isfinite(c[:, j]).sum()) for c in recording.controls)
+            top = max(float(np.nanmax(np.abs(c[:, j]))) for c in recording.controls)
+            warn(f"{recording.where(d, far[d][0], name)}: {count} of {total} recorded {name!r} values lie more than "
+                 f"the control set's width outside it ([{lo:g}, {hi:g}]; up to {top:.4g} in magnitude); each is "
+                 "snapped to the nearest control of the set, so check the unit (or widen [control] values)")
+
+
+def _distance(grid, a, b):
+    """Distances (in cell widths, periodic coordinates the short way round) between states a (..., n) and b."""
+    diff = a - b
+    for i in np.flatnonzero(grid.periodic):
+        period = grid.high[i] - grid.low[i]
+        diff[..., i] = np.mod(diff[..., i] + period / 2, period) - period / 2
+    scale = np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
+    return np.sqrt(((diff / scale) ** 2).sum(axis=-1))
+
+
+def _misses(problem, x, nxt):
+    """The best one-step prediction's distance from each state x (k, n) to nxt (k, n), in cell widths."""
+    A = problem.n_actions
+    pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
+    return _distance(problem.grid, pred, nxt[:, None, :]).min(axis=1)
+
+
+def _check_time_direction(problem, recording, states, most=2000):
+    """Refuse recordings whose states, in the order of t, follow the dynamics backwards: each step's best one-step
+    prediction misses the next state by more than half the step, while a step taken from the next state lands
+    on the previous one (a quarter of that miss or nearer)."""
+    n = states.shape[2]
+    x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
+    pick = np.linspace(0, len(x) - 1, min(most, len(x))).astype(int)
+    x, nxt = problem.grid.wrap(x[pick]), problem.grid.wrap(nxt[pick])
+    forward, step = float(np.median(_misses(problem, x, nxt))), float(np.median(_distance(problem.grid, nxt, x)))
+    if not forward > max(0.5 * step, 0.05):           # the dynamics explain the steps (or nothing moves)
+        return
+    backward = float(np.median(_misses(problem, nxt, x)))
+    if backward < 0.25 * forward:
+        raise ValueError(f"{recording.source}, column 't': the recorded motion runs backwards in time: in the order "
+                         f"of t, the dynamics' best one-step prediction misses the next state by {forward:.3g} cell "
+                         f"widths (median; the steps are {step:.3g}), but a step from the next state lands "
+                         f"{backward:.3g} from the previous one; t seems to decrease along the motion (a time-to-go, "
+                         "or its sign): make t increase as the motion goes")

@@ -1,4 +1,5 @@
-"""Refinement: infer on a coarse grid, then split the cells near each inferred boundary and infer again.
+"""Refinement (the cells model): infer on a coarse grid, then split the cells near each inferred boundary
+and infer again.
 
 A uniform grid fine enough to place a boundary precisely is costly in every dimension; the
 boundary only needs fine cells where it lies. :func:`refine_near` splits, along the coordinates a
@@ -11,7 +12,8 @@ import time
 
 import pandas as pd
 
-from .inference import boundary_errors, infer
+from .cells import infer_cells
+from .inference import boundary_errors
 from .regions import Bound, Box, Disk
 
 
@@ -39,18 +41,18 @@ def refine_near(grid, region, window=2, factor=2):
 
 
 def refinement(problem, recording, levels=2, truth=(), window=2, factor=2, **infer_options):
-    """Infer on ``problem``'s grid, then ``levels`` times refine near every chosen region (cells
-    excepted) and infer again. Returns a table -- per level: cells, the chosen constraints, the
-    boundary error against each region of ``truth`` -- and the :class:`~.inference.ContinuousInference`
-    of every level. ``infer_options`` go to :func:`.inference.infer`."""
+    """Infer on ``problem``'s grid (:func:`.cells.infer_cells`), then ``levels`` times refine near every
+    chosen region (cells excepted) and infer again. Returns a table -- per level: cells, the chosen
+    constraints, the boundary error against each region of ``truth`` -- and the
+    :class:`~.cells.CellInference` of every level. ``infer_options`` go to :func:`.cells.infer_cells`."""
     rows, runs, current = [], [], problem
     for level in range(levels + 1):
         start = time.perf_counter()
-        run = infer(current, recording, **infer_options)
+        run = infer_cells(current, recording, **infer_options)
         runs.append(run)
         errors = boundary_errors(run, truth)
         rows.append({"level": level, "cells": current.grid.n_cells,
-                     "chosen": "; ".join(run.candidates.label(k) for k in run.result.chosen) or "none",
+                     "chosen": "; ".join(run.labels()) or "none",
                      **{f"error {region.describe(current.grid)}": e for region, e in zip(truth, errors)},
                      "seconds": time.perf_counter() - start})
         chosen = [r for r in run.chosen_regions() if r is not None]

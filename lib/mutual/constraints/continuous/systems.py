@@ -19,10 +19,8 @@ control held constant (zero-order hold), and refuses non-finite results with a m
 dynamics, the state and the control.
 """
 
-import importlib
 import inspect
 import math
-import sys
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -30,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ... import dubins
+from ...inputs import UserFunction, call, load_function
 
 
 def pendulum(x, u, mass=1.0, length=1.0, damping=0.1, gravity=9.81):
@@ -73,29 +72,16 @@ SYSTEMS = {
 
 @lru_cache(maxsize=None)
 def resolve_dynamics(spec, folder=None):
-    """The dynamics function named by ``spec``: a key of ``SYSTEMS`` or ``"module:function"``
-    (imported with ``folder`` -- the system file's folder -- first on the path)."""
+    """The dynamics named by ``spec``: a key of ``SYSTEMS`` or ``"module:function"``, as a
+    :class:`mutual.inputs.UserFunction` (``module.py`` in ``folder`` -- the system file's folder -- first,
+    then an installed module; :func:`mutual.inputs.load_function`). Importing the module runs its code."""
     if not isinstance(spec, str) or not spec:
         raise ValueError(f"system: must be a named system ({', '.join(SYSTEMS)}) or 'module:function', got {spec!r}")
     if spec in SYSTEMS:
-        return SYSTEMS[spec][0]
+        return UserFunction(SYSTEMS[spec][0], spec, None)
     if ":" not in spec:
         raise ValueError(f"system: {spec!r} is neither a named system ({', '.join(SYSTEMS)}) nor 'module:function'")
-    module_name, _, name = spec.partition(":")
-    added = folder is not None and str(folder) not in sys.path
-    if added:
-        sys.path.insert(0, str(folder))
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as err:
-        raise ValueError(f"system: cannot import module {module_name!r} of {spec!r} ({err})") from None
-    finally:
-        if added:
-            sys.path.remove(str(folder))
-    function = getattr(module, name, None)
-    if not callable(function):
-        raise ValueError(f"system: module {module_name!r} has no function {name!r}")
-    return function
+    return load_function(spec, folder, where="system")
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,7 +108,7 @@ class System:
         unknown = [p for p in self.periodic if p not in self.state_names]
         if unknown:
             raise ValueError(f"periodic: {unknown[0]!r} is not a state coordinate {list(self.state_names)}")
-        function = resolve_dynamics(self.spec, self.folder)
+        function = resolve_dynamics(self.spec, self.folder).function
         _check_parameters(function, self.spec, dict(self.parameters))
         object.__setattr__(self, "parameters", dict(self.parameters))
 
@@ -137,10 +123,20 @@ class System:
     def n_controls(self):
         return len(self.control_names)
 
+    @property
+    def file(self):
+        """The file of a user's dynamics (``"module:function"``): the code that runs; None for a named system."""
+        return resolve_dynamics(self.spec, self.folder).file
+
     def f(self, x, u):
-        """dx/dt (N, n) at states ``x`` (N, n) under controls ``u`` (N, m)."""
-        out = resolve_dynamics(self.spec, self.folder)(x, u, **self.parameters)
-        out = np.asarray(out, dtype=float)
+        """dx/dt (N, n) at states ``x`` (N, n) under controls ``u`` (N, m). An exception inside a user's
+        function is a ValueError naming the function and its file."""
+        out = call(resolve_dynamics(self.spec, self.folder), (x, u), self.parameters, f"system {self.spec!r}")
+        try:
+            out = np.asarray(out, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"system {self.spec!r}: the dynamics returned {type(out).__name__}, not an array of "
+                             "numbers dx/dt") from None
         if out.shape != x.shape:
             raise ValueError(f"system {self.spec!r}: the dynamics returned shape {out.shape} for states of shape "
                              f"{x.shape}; it must return dx/dt with one row per state")

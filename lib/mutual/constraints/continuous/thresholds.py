@@ -12,6 +12,14 @@ action that reaches such a state with positive probability has Q = -inf. On a di
 continuous system probability leaks into neighbouring cells, so psi*(R) = 0 often leaves the cells
 next to R without an allowed action, and a demonstration that passes near them becomes impossible.
 
+This is where the cells model (:mod:`.cells`) loses what continuous demonstrations say: a bound between
+the demonstrations and the truth has the demonstrated cell next to it, whose points leak into it under
+the demonstrated actions, so psi*(R) is large; the cells next to R whose every action leaks are left
+without an allowed action; the lemma raises psi until none is -- on the pendulum often to the largest
+chance in the column, where the bound forbids nothing and is dropped (:func:`threshold_table` shows it
+per bound). The closer the demonstrator comes to its limit, the less findable the limit. The default
+model (:mod:`.pointwise`) evaluates the constraint per point, where psi* = 0 exactly.
+
 ``thresholds="lemma"`` takes the lemma exactly: for every candidate that eq. (3.3) makes
 infeasible, the lowest psi >= psi* that keeps all demonstrations feasible, found by bisection over
 the candidate's distinct values of S(x, a, R) (feasibility is monotone in psi: a larger psi forbids
@@ -123,3 +131,27 @@ def chance_columns(mdp, demos, groups, rule="lemma"):
         rows_, cols = np.r_[old.row[stay], new.row], np.r_[old.col[stay], raised[new.col]]
         forbidden = sp.csc_matrix((np.ones(rows_.size, dtype=bool), (rows_, cols)), shape=forbidden.shape)
     return psi, forbidden, raised
+
+
+def threshold_table(mdp, demos, grid, bounds):
+    """Where the cells model loses a bound (module docstring), one row per :class:`~.regions.Bound` of
+    ``bounds`` (one coordinate): psi* of eq. (3.3), whether the demonstrations stay feasible at it, the
+    lowest feasible psi (Lemma 3.2.1 taken exactly) and how many offered state-actions that threshold still
+    forbids (0: the candidate forbids nothing and is dropped)."""
+    import pandas as pd
+    from .candidates import _bound_columns
+    dims = {b.dim for b in bounds}
+    if len(dims) != 1:
+        raise ValueError("bounds: need bounds on one coordinate")
+    SR = _bound_columns(mdp, grid, dims.pop(), list(bounds))
+    rows = demonstrated_rows(mdp, demos)
+    star = eq33(SR, rows)
+    bad = infeasible_at(mdp, demos, SR, star)
+    psi = star.copy()
+    if bad.any():
+        psi[bad] = lemma(mdp, demos, sp.csc_matrix(SR)[:, np.flatnonzero(bad)], star[bad])
+    offered = mdp.allowed.reshape(-1)
+    forbids = np.asarray((forbidden_by(SR, psi).multiply(sp.csr_matrix(offered.reshape(-1, 1)))).sum(axis=0)).ravel()
+    return pd.DataFrame({"bound": [b.describe(grid) for b in bounds], "value": [b.value for b in bounds],
+                         "psi eq. 3.3": star, "feasible at eq. 3.3": ~bad, "psi Lemma 3.2.1": psi,
+                         "state-actions forbidden": forbids.astype(int)})

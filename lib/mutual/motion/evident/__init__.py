@@ -8,6 +8,7 @@ the Dubins car (:mod:`.dragan_car`); the observer's belief over time for a task 
 (:mod:`.plots`) and the Explore view (:mod:`.explore`). The solver is :mod:`mutual.motion.trajopt`.
 """
 
+from ...lazy import lazy_names
 from .evidence import anticipates, close_but_clear, distance_table, distance_to_point, lead_time, obvious_avoidance
 from .mpc import receding_horizon_ilqr, receding_horizon_ilqr_batch
 from .safety import EvidentSafetyTask, figure_scenario, hypothesis_weights, solve_hypotheses
@@ -15,5 +16,10 @@ from .task_belief import belief_over_time
 from .vehicles import bicycle_step, dubins_step
 
 __all__ = ["EvidentSafetyTask", "anticipates", "belief_over_time", "bicycle_step", "close_but_clear",
-           "distance_table", "distance_to_point", "dubins_step", "figure_scenario", "hypothesis_weights",
-           "lead_time", "obvious_avoidance", "receding_horizon_ilqr", "receding_horizon_ilqr_batch", "solve_hypotheses"]
+           "distance_table", "distance_to_point", "dubins_step", "figure_61_scan", "figure_72_scan", "figure_scenario",
+           "hazard_feature", "hypothesis_weights", "lead_time", "obvious_avoidance", "receding_horizon_ilqr",
+           "receding_horizon_ilqr_batch", "solve_hypotheses", "time_both"]
+
+# the scans of what the thesis leaves open and Dragan and Srinivasa on the car (notebook 06), on first use
+__getattr__ = lazy_names(__name__, {"figure_61_scan": "scans", "figure_72_scan": "scans", "hazard_feature": "scans",
+                                    "time_both": "dragan_car"})

@@ -8,6 +8,8 @@ first two coordinates (the position ``P x``) are used.
 import numpy as np
 import pandas as pd
 
+from ...inputs import positive
+
 # Fig. 7.2's "makes its avoidance obvious", fixed before any result: the integral distance at
 # least 25% above both H0's and H1's, and the closest approach at least 1.5 times H1's
 OBVIOUS_INTEGRAL_GAIN, OBVIOUS_MIN_RATIO = 0.25, 1.5
@@ -30,13 +32,6 @@ def _point(point):
     return p
 
 
-def _dt(dt):
-    if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.integer, np.floating)) \
-            or not (np.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a positive finite number, got {dt!r}")
-    return float(dt)
-
-
 def distance_over_time(xs, point):
     """``|P x_k - h|`` for every knot of the path (N+1,)."""
     return np.linalg.norm(_path(xs)[:, :2] - _point(point), axis=1)
@@ -49,7 +44,7 @@ def distance_to_point(xs, point, dt):
     Returns ``{"min": ..., "integral": ...}``.
     """
     d = distance_over_time(xs, point)
-    return {"min": float(d.min()), "integral": float(np.trapezoid(d, dx=_dt(dt)))}
+    return {"min": float(d.min()), "integral": float(np.trapezoid(d, dx=positive("dt", dt)))}
 
 
 def distance_table(results, point, dt):
@@ -84,7 +79,7 @@ def lead_time(xs, reference, point, dt, margin=SEPARATION_MARGIN):
         raise ValueError(f"xs and reference must have the same number of knots, got {d.shape} and {d_ref.shape}")
     if not (np.isfinite(margin) and margin > 0):
         raise ValueError(f"margin must be a positive finite number, got {margin!r}")
-    dt = _dt(dt)
+    dt = positive("dt", dt)
     t_close = float(np.argmin(d_ref) * dt)
     apart = np.nonzero(d - d_ref > margin * d_ref.min())[0]
     t_sep = float(apart[0] * dt) if apart.size else np.inf

@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 
+from ...inputs import positive
 from ..legible.objective import legible_cost
 from ..legible.problem import QuadraticCost, reaching_cost
 from ..trajopt import MultiStart, ilqr, ilqr_batch, solve_single_shooting, trajectory_cost, trajectory_cost_grad
@@ -85,13 +86,6 @@ def _terminal(x, params):
     return params["weights"][0] * jnp.sum((project(x) - params["goal"]) ** 2)
 
 
-def _positive(name, value):
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-
-
 @dataclass(frozen=True)
 class EvidentSafetyTask:
     """A planar reach task with something to keep away from (sections 7.1-7.2, Fig. 6.1).
@@ -129,7 +123,7 @@ class EvidentSafetyTask:
             if not np.all(np.isfinite(a)):
                 raise ValueError(f"{name} must be finite")
         for name in ("radius", "horizon", "speed", "wheelbase"):
-            _positive(name, getattr(self, name))
+            positive(name, getattr(self, name))
         if isinstance(self.steps, (bool, np.bool_)) or not (isinstance(self.steps, (int, np.integer))
                                                               and self.steps >= 1):
             raise ValueError(f"steps must be a positive integer, got {self.steps!r}")

@@ -14,6 +14,7 @@ from ..legible.objective import geometric_alpha_schedule, linear_alpha_schedule
 from ..trajopt import ILQRError
 from . import safety as es
 from .evidence import anticipates, close_but_clear, distance_to_point, obvious_avoidance
+from .task_belief import belief_over_time
 
 H1_ONLY_SLIGHTLY = 0.05   # Fig. 7.2: H1 "only slightly" farther: integral distance gain in (0, 5%)
 
@@ -138,6 +139,81 @@ def figure_61_scan(effort_weights, keep_out_weights, alphas, steps=100):
                              "legible farther (first rule)": bool(legible is not None and h1 is not None
                                                                   and dl > d1 > base.radius),
                              "error": err1 or err})
+    return pd.DataFrame(rows)
+
+
+def ring_starts(hazard, goal, radii=(2.0, 4.5), bearings=tuple(range(0, 360, 45)), turns=(0.0, np.pi / 2, -np.pi / 2),
+                min_goal_distance=2.5):
+    """Dubins start states around the hazard ``h``: positions ``h + rho (cos b, sin b)`` for each radius and
+    bearing (degrees), except those within ``min_goal_distance`` of the goal ``g``, each heading towards ``g``
+    turned by each of ``turns`` (radians, counter-clockwise). Returns an (S, 3) array of ``(x, y, theta)``."""
+    hazard, goal = np.asarray(hazard, float), np.asarray(goal, float)
+    starts = []
+    for rho in radii:
+        for b in np.radians(np.asarray(bearings, float)):
+            p = hazard + rho * np.array([np.cos(b), np.sin(b)])
+            if np.linalg.norm(goal - p) < min_goal_distance:
+                continue
+            towards = np.arctan2(*(goal - p)[::-1])
+            starts += [[p[0], p[1], towards + turn] for turn in turns]
+    return np.array(starts)
+
+
+def _best_from_rates(task, weights, turn_rates):
+    """The lowest-cost iLQR optimum over starts from constant turn rates (single solves: each compiles once)."""
+    best = None
+    for rate in turn_rates:
+        try:
+            r = es.solve(task, weights, us0=np.full((task.steps, task.controls), rate))
+        except ILQRError:
+            continue
+        best = r if best is None or r.cost < best.cost else best
+    return best
+
+
+def figure_72_start_scan(starts, kappas, steps=100, turn_rates=(0.0, 1.5, -1.5)):
+    """Fig. 7.2's H0 and H1 from each start state (x, y, theta) and horizon ``T = kappa |g - p0| / v`` (the
+    text's hazard): the best of iLQR runs from constant turn rates for each, H1's integral-distance gain over
+    H0 and whether H1 is "only slightly" farther (0 < gain < 5%). One row per (start, kappa)."""
+    base, w0, w1 = es.figure_scenario("7.2", steps=steps)
+    rows = []
+    for start in np.asarray(starts, float):
+        for kappa in kappas:
+            horizon = kappa * np.linalg.norm(base.goal - start[:2]) / base.speed
+            task = replace(base, x0=start, horizon=horizon)
+            h0, h1 = (_best_from_rates(task, w, turn_rates) for w in (w0, w1))
+            row = {"start x": start[0], "start y": start[1], "heading (deg)": float(np.degrees(start[2])),
+                   "kappa": float(kappa), "T (s)": horizon}
+            if h0 is None or h1 is None:
+                rows.append({**row, "H1 integral gain": np.nan, "H1 only slightly": False, "error": "iLQR did not converge"})
+                continue
+            d0, d1 = (distance_to_point(r.xs, task.hazard, task.dt) for r in (h0, h1))
+            gain = d1["integral"] / d0["integral"] - 1
+            rows.append({**row, "H0 closest": d0["min"], "H1 closest": d1["min"], "H1 integral gain": gain,
+                         "H1 only slightly": bool(0 < gain < H1_ONLY_SLIGHTLY), "error": ""})
+    return pd.DataFrame(rows)
+
+
+def belief_start_scan(figure, starts, horizons, alpha=0.5, steps=100):
+    """``P(H1 | motion to T/2)`` of the eq. (6.8) observer watching the legible path against watching H1's
+    optimum, for Fig. ``"7.1"`` or ``"7.2"`` from each start state and horizon (exact for Fig. 7.1, Laplace
+    around the optimal continuations for the car, :func:`.task_belief.belief_over_time`). One row per cell,
+    with whether the legible path shows the correction (a higher belief) and any solver error."""
+    base, w0, w1 = es.figure_scenario(figure, steps=steps)
+    times = np.array([0, steps // 2])
+    rows = []
+    for start in np.asarray(starts, float):
+        for horizon in horizons:
+            task = replace(base, x0=start, horizon=float(horizon))
+            row = {"figure": figure, "start": str(np.round(start, 2).tolist()), "T (s)": float(horizon)}
+            try:
+                paths = es.solve_hypotheses(task, w0, w1, alpha)
+                legible, h1 = (belief_over_time(task, w0, w1, paths[k].us, paths, times=times)[-1] for k in ("legible", "H1"))
+            except (ILQRError, ValueError) as err:
+                rows.append({**row, "shows the correction": False, "error": str(err)[:120]})
+                continue
+            rows.append({**row, "P(H1 | legible to T/2)": float(legible), "P(H1 | H1 optimum to T/2)": float(h1),
+                         "shows the correction": bool(legible > h1), "error": ""})
     return pd.DataFrame(rows)
 
 

@@ -11,21 +11,30 @@ path measures for Figures 6.2-6.3 (:mod:`.path_measures`, :mod:`.multigoal`), me
 :mod:`mutual.motion.observer`.
 """
 
+from ...lazy import lazy_names
 from .lqr import LQSolution, solve_lq
 from .objective import (distractor_mixture, geometric_alpha_schedule, inverse_square_alpha_schedule, legible_cost,
                         legible_trajectory, linear_alpha_schedule, receding_horizon, replan_gains)
 from .problem import (LinearDynamics, QuadraticCost, double_integrator, random_lq_hypotheses, reaching_cost,
                       single_integrator, solve)
 
-__all__ = ["LQSolution", "LinearDynamics", "QuadraticCost", "distractor_mixture", "double_integrator",
-           "geometric_alpha_schedule", "inverse_square_alpha_schedule", "legible_cost", "legible_trajectory", "linear_alpha_schedule",
-           "multi_distractor_qp", "random_lq_hypotheses", "reaching_cost", "receding_horizon", "receding_horizon_qp",
-           "replan_gains", "single_integrator", "solve", "solve_lq"]
+_ON_FIRST_USE = {
+    # the QP solvers load cvxpy (a plain LQ solve needs only NumPy)
+    "multi_distractor_qp": "qp", "receding_horizon_qp": "qp",
+    # chapter 6's figures and statements, measured and checked by independent routes
+    "figure_62_scan": "anticipation", "receding_equivalence": "anticipation",
+    "gradient_linear_structure": "dragan", "figure_63_verdicts": "multigoal", "time_to_reach": "path_measures",
+    "correlation_scan": "predictability", "corollary_operation_counts": "timing", "replan_against_dragan": "timing",
+    "lbfgs_likelihood_ratio_minimiser": "verify", "lemma_641_exhaustive": "verify",
+    "suboptimality_multiplier": "verify",
+}
 
+__all__ = ["LQSolution", "LinearDynamics", "QuadraticCost", "corollary_operation_counts", "correlation_scan",
+           "distractor_mixture", "double_integrator", "figure_62_scan", "figure_63_verdicts",
+           "geometric_alpha_schedule", "gradient_linear_structure", "inverse_square_alpha_schedule",
+           "lbfgs_likelihood_ratio_minimiser", "legible_cost", "legible_trajectory", "lemma_641_exhaustive",
+           "linear_alpha_schedule", "multi_distractor_qp", "random_lq_hypotheses", "reaching_cost",
+           "receding_equivalence", "receding_horizon", "receding_horizon_qp", "replan_against_dragan", "replan_gains",
+           "single_integrator", "solve", "solve_lq", "suboptimality_multiplier", "time_to_reach"]
 
-def __getattr__(name):
-    """The QP solvers load cvxpy, so :mod:`.qp` is imported on first use (a plain LQ solve needs only NumPy)."""
-    if name in ("multi_distractor_qp", "receding_horizon_qp"):
-        from . import qp
-        return getattr(qp, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_names(__name__, _ON_FIRST_USE)

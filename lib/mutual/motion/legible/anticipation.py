@@ -81,15 +81,18 @@ def receding_alphas(dynamics, J1, J0, xs, us, N):
     return alphas, miss, bend
 
 
-def receding_equivalence(dynamics, J1, J0, x0, N, beta=1.0):
-    """Does receding-horizon control (eq. (6.16)) reproduce the D&S-weighted optimum?
+def receding_equivalence(dynamics, J1, J0, x0, N, beta=1.0, weights=None):
+    """Does receding-horizon control (eq. (6.16)) reproduce the D&S-weighted optimum (``weights`` of the
+    prefixes, default D&S's ``T - t``)? Under eq. (6.17) it always does, for any positive weights: each
+    replan's first control is affine in ``1 / alpha`` and every such optimum lies on that line, with
+    ``alpha`` increasing; so this holds by construction there.
 
     Returns a dict: ``us_weighted``, ``xs_weighted`` (the optimum of :func:`weighted_evidence_optimum`),
     ``alphas`` (the recovered schedule), ``miss`` (largest per-step miss), ``curvature``,
     ``gap`` (largest |x| difference between the receding-horizon run with the recovered schedule
     and the weighted optimum), ``positive`` and ``increasing`` (of the schedule).
     """
-    us = weighted_evidence_optimum(dynamics, J1, J0, x0, N, beta)
+    us = weighted_evidence_optimum(dynamics, J1, J0, x0, N, beta, weights)
     xs = _rollout(dynamics, np.asarray(x0, float), us)
     alphas, miss, bend = receding_alphas(dynamics, J1, J0, xs, us, N)
     # the last prefix carries no weight (f(T) = 0): the last replan is the plain task, alpha = inf,

@@ -26,18 +26,14 @@ import numpy as np
 from scipy.linalg import solveh_banded
 from scipy.special import softmax
 
+from ...inputs import positive
+
 
 def _goals(goals):
     g = np.asarray(goals, float)
     if g.ndim != 2 or len(g) < 2 or not np.all(np.isfinite(g)):
         raise ValueError(f"goals must be a finite (n_goals >= 2, dim) array, got shape {g.shape}")
     return g
-
-
-def _positive(name, value):
-    if not (isinstance(value, (int, float, np.integer, np.floating)) and np.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return float(value)
 
 
 def _goal_index(goal_index, n_goals):
@@ -87,7 +83,7 @@ def score_weights(N, T=1.0):
     """Trapezoid weights of ``int (.) f(t) dt / int f(t) dt`` with ``f(t) = T - t`` on ``N + 1`` knots."""
     if not isinstance(N, (int, np.integer)) or N < 1:
         raise ValueError(f"N must be a positive integer, got {N!r}")
-    T = _positive("T", T)
+    T = positive("T", T)
     t = np.linspace(0.0, T, N + 1)
     w = (T - t) * np.full(N + 1, T / N)
     w[[0, -1]] *= 0.5
@@ -106,7 +102,7 @@ def legibility_score(xs, goals, goal_index, prior=None, T=1.0):
 def trajectory_cost(xs, T=1.0):
     """``C[xi] = 1/2 int |xi'|^2 dt`` of the polyline ``xs`` traversed uniformly in time ``T``."""
     xs = _trajectory(xs)
-    T = _positive("T", T)
+    T = positive("T", T)
     dt = T / (len(xs) - 1)
     return float(0.5 * np.sum(np.diff(xs, axis=0) ** 2) / dt)
 
@@ -155,7 +151,7 @@ def optimise_legibility(start, goals, goal_index, N=100, beta=None, beta_ratio=1
     goal_index = _goal_index(goal_index, len(goals))
     if not (isinstance(N, (int, np.integer)) and N >= 2):
         raise ValueError(f"N must be an integer >= 2, got {N!r}")
-    eta, T = _positive("eta", eta), _positive("T", T)
+    eta, T = positive("eta", eta), positive("T", T)
     if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 0):
         raise ValueError(f"max_iter must be a non-negative integer, got {max_iter!r}")
     if not (np.isfinite(tol) and tol >= 0):
@@ -204,7 +200,7 @@ def single_integrator_controls(xs, T=1.0):
     """The controls ``u_k = (xi_{k+1} - xi_k) / dt`` that make x' = u (eq. (6.5)) trace the polyline,
     so a Dragan-Srinivasa trajectory can be scored by the likelihood ratio of chapter 6."""
     xs = _trajectory(xs)
-    T = _positive("T", T)
+    T = positive("T", T)
     return np.diff(xs, axis=0) * ((len(xs) - 1) / T)
 
 
@@ -227,7 +223,7 @@ def gradient_linear_structure(xs, goals, goal_index, prior=None, T=1.0, eps=1e-3
     goals = _goals(goals)
     xs = _trajectory(xs, goals.shape[1])
     goal_index = _goal_index(goal_index, len(goals))
-    eps = _positive("eps", eps)
+    eps = positive("eps", eps)
     N, d = len(xs) - 1, goals.shape[1]
     grad = np.zeros((N - 1, d))
     def score_at(k, j, step):

@@ -54,6 +54,8 @@ class LinearDynamics:
         for a in (self.A, self.B):
             if a.ndim == 3 and len(a) < start + N:
                 raise ValueError(f"the dynamics have {len(a)} stages; stages {start}..{start + N - 1} were asked for")
+        if self.A.ndim == 2 and self.B.ndim == 2:
+            return self                                  # time-invariant and immutable
         A = self.A[start:start + N] if self.A.ndim == 3 else self.A
         B = self.B[start:start + N] if self.B.ndim == 3 else self.B
         return LinearDynamics(A, B)
@@ -172,7 +174,10 @@ class QuadraticCost:
         return f in _STAGE_FIELDS and getattr(self, f).ndim == (3 if f in ("Q", "R") else 2)
 
     def stages(self, start, N):
-        """The cost of stages ``start .. start + N - 1`` plus the terminal cost (for replanning)."""
+        """The cost of stages ``start .. start + N - 1`` plus the terminal cost (for replanning); the cost
+        itself when no field varies over the stages (it is immutable)."""
+        if not any(self._per_stage(f) for f in _STAGE_FIELDS):
+            return self
         cut = [getattr(self, f)[start:start + N] if self._per_stage(f) else getattr(self, f) for f in _FIELDS]
         return QuadraticCost(*cut, self.const)
 

@@ -7,6 +7,10 @@
 * :func:`lbfgs_likelihood_ratio_minimiser` -- Theorem 6.4.2: scipy's L-BFGS on the *raw* objective
   ``log Lambda(u) = log P(u | H0) - log P(u | H1)`` of eqs. (6.7)-(6.9), partition functions
   included, each cost rolled out step by step.
+* :func:`multi_distractor_kkt` -- section 6.5's Lagrangian: the multi-distractor QP by a conic solver and
+  an active set, its KKT conditions checked by hand, against the Riccati LQR of the linear combination.
+* :func:`bounded_legible_qp` -- Theorem 6.4.2 under a running control bound (line 1356), against L-BFGS-B
+  on the raw ratio (:func:`lbfgs_likelihood_ratio_minimiser` with ``bound``).
 * :func:`suboptimality_multiplier` -- section 6.4's reading of ``alpha`` (line 1232) as the
   Lagrange multiplier of a sub-optimality bound: ``min J1 - J0 s.t. J1 <= J1* + eps`` posed in
   states and controls and solved by a generic conic solver (cvxpy with Clarabel), whose multiplier
@@ -21,11 +25,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.optimize import minimize
 from scipy.special import logsumexp
 
-from .problem import check_lq_problem
-from .qp import dynamics_constraints, stacked_cost
+from .objective import legible_trajectory
+from .problem import check_lq_problem, solve
+from .qp import affine_constraints, dynamics_constraints, multi_distractor_qp, stacked_cost
 
 
 # ---- Lemma 6.4.1 on a problem small enough to list every control sequence ---------------------------
@@ -79,6 +85,16 @@ def _all_sequences(T):
 def _sequence_costs(hyp, us, xs):
     stage = _discrete_cost(hyp, xs[:, :-1], us, terminal=False).sum(axis=1)
     return stage + _discrete_cost(hyp, xs[:, -1], None)
+
+
+def exact_log_probabilities(hypotheses, T=8):
+    """``log P(u | H_i)`` (eqs. (6.8)-(6.9), partition functions as exact sums) of every one of the ``3^T``
+    control sequences of :func:`random_discrete_hypotheses`: an array (len(hypotheses), 3^T)."""
+    if not isinstance(T, (int, np.integer)) or not 1 <= T <= 10:
+        raise ValueError(f"T must be an integer from 1 to 10 (3^T sequences are listed), got {T!r}")
+    us, xs = _all_sequences(T)
+    costs = np.array([_sequence_costs(h, us, xs) for h in hypotheses])
+    return -costs - logsumexp(-costs, axis=1, keepdims=True)
 
 
 def lemma_641_exhaustive(hypotheses, T=8):
@@ -157,16 +173,19 @@ def log_partition(x0, arrays):
     return float(-(value + grad @ step + 0.5 * step @ H @ step) + 0.5 * size * np.log(2 * np.pi) - 0.5 * logdet)
 
 
-def lbfgs_likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0, gtol=1e-11):
+def lbfgs_likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0, gtol=1e-11, bound=None):
     """Theorem 6.4.2 by a generic optimiser: L-BFGS (scipy) on the raw ``log Lambda(u) + alpha J1(u)``,
     ``log Lambda = log P(u|H0) - log P(u|H1)`` with ``log P(u|H_i) = -J_i(u) - log Z_i`` (eqs. (6.7)-(6.9)):
     each cost rolled out step by step (:func:`_rolled_out_cost`), each partition function from
-    :func:`log_partition`, gradients by automatic differentiation, from zero controls.
-    Returns ``(controls (N, m), scipy result)``."""
+    :func:`log_partition`, gradients by automatic differentiation, from zero controls. ``bound``: a running
+    constraint ``|u_k,j| <= bound`` on every control (L-BFGS-B's box; the partition functions stay
+    constants, so Theorem 6.4.2's argument is unchanged). Returns ``(controls (N, m), scipy result)``."""
     for cost in (J0, J1):
         check_lq_problem(dynamics, cost, N)
     if not (np.isfinite(alpha) and alpha >= 0):
         raise ValueError(f"alpha must be a finite number >= 0, got {alpha!r}")
+    if bound is not None and not (np.isfinite(bound) and bound > 0):
+        raise ValueError(f"bound must be a positive finite number (|u| <= bound) or None, got {bound!r}")
     with jax.enable_x64(True):
         x0 = jnp.asarray(x0, float)
         arrays0, arrays1 = _stage_arrays(dynamics, J0, N), _stage_arrays(dynamics, J1, N)
@@ -175,9 +194,69 @@ def lbfgs_likelihood_ratio_minimiser(dynamics, J0, J1, x0, N, alpha=0.0, gtol=1e
         def fun(flat):
             v, g = _RAW_VALUE_AND_GRAD(jnp.asarray(flat), x0, arrays0, arrays1, log_z0, log_z1, alpha)
             return float(v), np.asarray(g, float)
-        result = minimize(fun, np.zeros(N * dynamics.m), jac=True, method="L-BFGS-B",
+        box = None if bound is None else [(-bound, bound)] * (N * dynamics.m)
+        result = minimize(fun, np.zeros(N * dynamics.m), jac=True, method="L-BFGS-B", bounds=box,
                           options={"gtol": gtol, "ftol": 1e-16, "maxiter": 20_000, "maxcor": 30})
     return result.x.reshape(N, dynamics.m), result
+
+
+def bounded_legible_qp(dynamics, J1, J0, x0, N, alpha, bound, solver="CLARABEL"):
+    """``min (1 + alpha) J1 - J0`` subject to the dynamics and the running constraint ``|u_k,j| <= bound``, by
+    a conic solver (cvxpy, states and controls as variables; no Riccati recursion, no likelihoods). Returns
+    ``(controls (N, m), number of controls at the bound)``."""
+    for cost in (J0, J1):
+        check_lq_problem(dynamics, cost, N)
+    n, m = dynamics.n, dynamics.m
+    E, e = dynamics_constraints(dynamics, np.asarray(x0, float), N)
+    z = cp.Variable(E.shape[1])
+    objective = _convex_quadratic(*stacked_cost((1 + alpha) * J1 - J0, N, n, m), z, "(1 + alpha) J1 - J0")
+    u = z[(N + 1) * n:]
+    prob = cp.Problem(cp.Minimize(objective), [E @ z == e, u <= bound, -u <= bound])
+    prob.solve(solver=solver, **(TIGHT if solver == "CLARABEL" else {}))
+    if prob.status != "optimal":
+        raise ValueError(f"the bounded legible problem is {prob.status}")
+    us = np.asarray(u.value).reshape(N, m)
+    return us, int(np.sum(np.abs(us) >= bound * (1 - 1e-7)))
+
+
+# ---- section 6.5's Lagrangian: the multi-distractor QP by three routes -------------------------------
+
+def multi_distractor_kkt(dynamics, J1, distractors, x0, N, etas):
+    """Section 6.5 (line 1280): the QP ``min J1 s.t. J1 - J0_i <= eta_i`` reduces to the linear combination
+    ``(1 + sum l) J1 - sum l_i J0_i`` with its multipliers ``l``. The QP is solved by Clarabel (cvxpy, at the
+    tolerances of :data:`TIGHT`: its multipliers are compared, not only its controls) and by
+    the active set of :mod:`.qp` (no cvxpy); the KKT conditions are checked by hand on Clarabel's answer
+    (stationarity with the dynamics' multipliers fitted by least squares, primal and dual feasibility,
+    complementary slackness); then the Riccati LQR of the combination, with either solver's multipliers
+    (they differ when more bounds bind than the end point has dimensions), is compared with the QP's
+    solution. Returns a dict of relative gaps and residuals, the multipliers, how many are positive and how
+    many bounds are active."""
+    distractors = list(distractors)
+    xs, us, lam = multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver_options=TIGHT)
+    lam = np.clip(lam, 0.0, None)                 # the interior point's -1e-12 are zeros
+    _, us_b, lam_b = multi_distractor_qp(dynamics, J1, distractors, x0, N, etas, solver="active-set")
+    n, m = dynamics.n, dynamics.m
+    E, e = dynamics_constraints(dynamics, np.asarray(x0, float), N)
+    P, p, _ = stacked_cost(J1, N, n, m)
+    A, c = affine_constraints(dynamics, J1, distractors, N)
+    z = np.concatenate([xs.ravel(), us.ravel()])
+    grad = P @ z + p + A.T @ lam
+    nu = spla.lsqr(E.T, -grad, atol=1e-14, btol=1e-14)[0]
+    g = A @ z + c - np.broadcast_to(etas, lam.shape)
+    scale_u, scale_l, scale_g = np.abs(us).max(), max(1e-12, np.abs(lam).max()), max(1.0, np.abs(etas).max())
+
+    def lagrangian(weights):                      # the Riccati LQR of (1 + sum l) J1 - sum l_i J0_i
+        sol = legible_trajectory(dynamics, J1, distractors, x0, N, weights.sum(), weights=weights) \
+            if weights.sum() > 0 else solve(dynamics, J1, x0, N)
+        return float(np.abs(sol.us - us).max() / scale_u)
+    return {"multipliers": lam, "positive": int(np.sum(lam > 1e-6 * scale_l)),
+            "active": int(np.sum(np.abs(g) <= 1e-7 * scale_g)),
+            "solvers u": float(np.abs(us - us_b).max() / scale_u),
+            "solvers multipliers": float(np.abs(lam - lam_b).max() / scale_l),
+            "stationarity": float(np.linalg.norm(grad + E.T @ nu) / max(1.0, np.linalg.norm(p))),
+            "feasibility": float(max(g.max(), np.abs(E @ z - e).max()) / scale_g),
+            "complementarity": float(np.abs(lam * g).max() / (scale_g * scale_l)),
+            "Lagrangian (Riccati) u": lagrangian(lam), "Lagrangian, active-set multipliers": lagrangian(lam_b)}
 
 
 # ---- alpha as the multiplier of a sub-optimality bound (line 1232) ------------------------------------

@@ -1,0 +1,174 @@
+"""``mutual constraints infer-continuous`` and ``mutual constraints simulate`` end to end: through the real
+console script on the pendulum example, and in-process on the car example, on a recording freshly
+simulated by ``simulate`` (whose hidden limit inference must find), and on malformed input (exit 2, one line)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from mutual.cli import continuous as cli_continuous
+from mutual.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "data" / "examples"
+SCRIPT = Path(sys.executable).with_name("mutual")
+
+DOUBLE_INTEGRATOR = """\
+system = "double_integrator"
+[state]
+low = [-1.5, -1.5]
+high = [1.5, 1.5]
+cells = [15, 15]
+[control]
+values = [-1.0, 0.0, 1.0]
+[time]
+dt = 0.2
+horizon = 20
+[reward]
+goal = [1.0, 0.0]
+state_weights = [1.0, 0.1]
+control_weights = [0.05]
+terminal_weights = [5.0, 1.0]
+temperature = 0.5
+[simulate]
+hidden = ["velocity <= 0.5"]
+start = [-1.0, 0.0]
+spread = [0.1, 0.0]
+n = 20
+fine_cells = [45, 45]
+record_every = 2
+"""
+
+
+def run_json(capsys, *argv):
+    assert main([str(a) for a in argv] + ["--json", "--no-progress"]) == 0, capsys.readouterr().err
+    return json.loads(capsys.readouterr().out)
+
+
+def test_infer_continuous_on_the_pendulum_example_through_the_console_script(tmp_path):
+    """The example's hidden limit is theta_dot <= 5 rad/s: the accepted constraint is that bound at the
+    fastest recorded speed (the tightest bound the demonstrations satisfy), inside its likelihood interval."""
+    command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "mutual.cli"]
+    run = subprocess.run(command + ["constraints", "infer-continuous", str(EXAMPLES / "pendulum_trajectories.csv"),
+                                    "--system", str(EXAMPLES / "pendulum.toml"), "--json", "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    first = out["chosen"][0]
+    assert (first["name"], first["side"], first["units"]) == ("theta_dot", "upper", "rad/s")
+    fastest = pd.read_csv(EXAMPLES / "pendulum_trajectories.csv")["theta_dot"].max()
+    assert first["value"] == pytest.approx(fastest) and first["interval_low"] <= first["value"] <= first["interval_high"]
+    assert first["gain_refit"] >= first["needed"] and out["controls_inferred"] == 0 and out["model"] == "points"
+    for name in ("continuous_ranking.csv", "continuous_chosen.csv", "continuous_constraints.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    ranking = pd.read_csv(tmp_path / "continuous_ranking.csv")
+    assert {"round", "rank", "constraint", "gain", "gain_per_demo", "F", "needed", "accepted"} <= set(ranking.columns)
+
+
+def test_infer_continuous_on_the_car_example_infers_its_controls(tmp_path, capsys):
+    out = run_json(capsys, "constraints", "infer-continuous", EXAMPLES / "unicycle_trajectories.csv", "--system",
+                   EXAMPLES / "unicycle.toml", "--cells", "13,10,8", "--rounds", "1", "--families", "disk",
+                   "--out", tmp_path)
+    assert out["controls_inferred"] == 20 * 28
+    assert out["ranking"][0][0]["constraint"].startswith("disk at (x, y)")
+
+
+@pytest.mark.parametrize("model", ["points", "cells"])
+def test_simulate_then_infer_finds_the_hidden_limit_of_a_fresh_recording(tmp_path, capsys, model):
+    (tmp_path / "di.toml").write_text(DOUBLE_INTEGRATOR)
+    made = run_json(capsys, "constraints", "simulate", "--system", tmp_path / "di.toml", "--out", tmp_path / "sim")
+    assert made["ranges"]["velocity"][1] <= 0.5 and made["period_seconds"] == pytest.approx(0.1)
+    frame = pd.read_csv(tmp_path / "sim" / "trajectories.csv", dtype={"demo": str})
+    assert list(frame.columns) == ["demo", "t", "position", "velocity", "acceleration"]
+    out = run_json(capsys, "constraints", "infer-continuous", tmp_path / "sim" / "trajectories.csv", "--system",
+                   tmp_path / "di.toml", "--model", model, *(["--inline"] if model == "cells" else []),
+                   "--out", tmp_path / "inferred")
+    first = out["chosen"][0]
+    assert first["constraint"].startswith("velocity <=") and abs(first["value"] - 0.5) <= 0.2 + 1e-9
+    assert out["n_demonstrations"] == 20 and out["steps"] == 20
+
+
+def test_simulate_can_leave_the_controls_out(tmp_path, capsys):
+    (tmp_path / "di.toml").write_text(DOUBLE_INTEGRATOR)
+    made = run_json(capsys, "constraints", "simulate", "--system", tmp_path / "di.toml", "--n", "3", "--no-controls",
+                    "--demonstrator", "mppi", "--out", tmp_path)
+    assert not made["controls_written"] and made["demonstrator"] == "mppi"
+    assert "acceleration" not in pd.read_csv(tmp_path / "trajectories.csv").columns
+
+
+def test_simulate_a_gridworld_writes_demonstrations_that_infer_reads(tmp_path, capsys):
+    made = run_json(capsys, "constraints", "simulate", "--world", EXAMPLES / "world.toml", "--hidden",
+                    "cell 4 0 psi 0.25", "--hidden", "action NW", "--n", "10", "--seed", "3", "--out", tmp_path)
+    assert made["n_demonstrations"] == 10
+    assert list(pd.read_csv(tmp_path / "demonstrations.csv").columns) == ["demo", "t", "state", "action"]
+    out = run_json(capsys, "constraints", "infer", tmp_path / "demonstrations.csv", "--world", EXAMPLES / "world.toml",
+                   "--rounds", "1", "--out", tmp_path)
+    assert out["n_demonstrations"] == 10
+
+
+def test_simulate_that_fails_while_writing_leaves_no_output(tmp_path, capsys, monkeypatch):
+    """The demonstrations go through the output set: a full disk after a partial write leaves nothing."""
+    import errno
+    import mutual.constraints as constraints
+
+    def full_disk(path, demos):
+        Path(path).write_text("demo,t,state,action\n0,0,")
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+    monkeypatch.setattr(constraints, "write_demonstrations", full_disk)
+    out = tmp_path / "sim"
+    assert main(["constraints", "simulate", "--world", str(EXAMPLES / "world.toml"), "--n", "3", "--out", str(out),
+                 "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert "No space left on device" in err and "no output was left" in err and "--out" in err
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("args, phrases", [
+    (["infer-continuous", EXAMPLES / "malformed" / "trajectories_gap.csv", "--system", EXAMPLES / "pendulum.toml"],
+     ["trajectories_gap.csv", "line 5", "column 't'", "gap in time"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system",
+      EXAMPLES / "malformed" / "pendulum_bad_cells.toml"], ["pendulum_bad_cells.toml", "key 'state.cells'"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "unicycle.toml"],
+     ["pendulum_trajectories.csv", "line 1", "missing column 'x'"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--cells", "41,x"], ["--cells 41,x"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--families", "blob"], ["--families blob", "unknown family 'blob'"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--families", "bound,cell"], ["--families", "'cell' candidates need --model cells"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--temperature", "-1"], ["--temperature -1", "'fit', 'file' or a positive number"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--temperature", "warm"], ["--temperature warm"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--model", "cells", "--temperature", "2"], ["--temperature", "--model points"]),
+    (["infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system", EXAMPLES / "pendulum.toml",
+      "--min-gain", "-1"], ["--min-gain -1"]),
+    (["simulate", "--system", EXAMPLES / "pendulum.toml", "--hidden", "omega < 3"], ["--hidden", "'omega'"]),
+    (["simulate", "--world", EXAMPLES / "world.toml", "--hidden", "cell 99 0"], ["--hidden 'cell 99 0'"]),
+])
+def test_bad_input_is_one_line_naming_the_file_and_place(tmp_path, capsys, args, phrases):
+    assert main(["constraints", *[str(a) for a in args], "--out", str(tmp_path)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and ": error: " in lines[0], lines
+    for phrase in phrases:
+        assert phrase in lines[0], lines[0]
+
+
+def test_help_names_the_formats(capsys):
+    for argv, phrase in ((["constraints", "infer-continuous", "--help"], "TRAJ.csv"),
+                         (["constraints", "simulate", "--help"], "--hidden")):
+        with pytest.raises(SystemExit):
+            main(argv)
+        assert phrase in capsys.readouterr().out
+
+
+def test_the_command_line_spells_out_the_candidate_families_and_defaults():
+    from mutual.constraints.continuous import inference
+    from mutual.constraints.continuous.candidates import FAMILIES
+    assert cli_continuous.FAMILIES == FAMILIES and set(inference.FAMILIES) == set(FAMILIES) - {"cell"}
+    assert cli_continuous.MIN_GAIN["points"] == round(inference.MIN_GAIN, 3)

@@ -1,0 +1,91 @@
+"""The notebook runner: it names the failing cell, requires declared parameters, exits non-zero naming the
+notebook, prints no progress bars in batch runs, and waits on its kernel sockets in short slices so a
+missed wake-up cannot hang a notebook."""
+
+import asyncio
+import queue
+import subprocess
+import sys
+import time
+
+import pytest
+
+from mutual.compendium.notebooks import NotebookError, _poll_in_slices, declared_parameters, execute
+
+from helpers.claims import notebook_file
+
+
+def test_runner_names_the_failing_cell(tmp_path):
+    path = notebook_file(tmp_path, "quick = False", "x = 1", "raise RuntimeError('boom')")
+    with pytest.raises(NotebookError, match=r"99_demo.ipynb failed in code cell 3 \(\"raise RuntimeError\(.boom.\)\"\): RuntimeError: boom"):
+        execute(path, {"quick": True})
+
+
+def test_runner_requires_declared_parameters(tmp_path):
+    with pytest.raises(ValueError, match="exactly one cell tagged 'parameters'"):
+        declared_parameters(notebook_file(tmp_path, "quick = False", tagged=False))
+    with pytest.raises(ValueError, match="must declare 'quick'"):
+        declared_parameters(notebook_file(tmp_path, "seed = 0"))
+    with pytest.raises(ValueError, match="no parameter named 'n_demos'"):
+        execute(notebook_file(tmp_path, "quick = False"), {"n_demos": 3})
+
+
+def test_make_figures_runner_exits_non_zero_naming_the_notebook(tmp_path):
+    path = notebook_file(tmp_path, "quick = False", "1 / 0")
+    out = subprocess.run([sys.executable, "-m", "mutual.compendium.notebooks", "--quick", str(path)],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode != 0
+    assert "99_demo.ipynb failed in code cell 2 ('1 / 0')" in out.stderr and "ZeroDivisionError" in out.stderr
+    assert "Traceback" not in out.stderr and len(out.stderr.strip().splitlines()) == 1
+
+
+def test_batch_runs_print_no_progress_bars(tmp_path):
+    """TQDM_DISABLE=1 plus the runner's kernel start-up line: even a bar asked for explicitly stays silent."""
+    path = notebook_file(tmp_path, "quick = False", "import os\nfrom tqdm import tqdm\nfrom tqdm.auto import tqdm as auto\n"
+                     "total = sum(tqdm(range(5), disable=False, desc='loud')) + sum(auto(range(5)))\n"
+                     "print(total, os.environ['TQDM_DISABLE'])")
+    nb = execute(path, {"quick": True})
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
+    assert [o.get("text") for o in outputs] == ["20 1\n"], outputs
+
+
+class MissedWakeUpChannel:
+    def __init__(self, arrives_after):
+        self.arrival = time.monotonic() + arrives_after
+        self.waits = []
+
+    async def get_msg(self, timeout=None):
+        self.waits.append(timeout)
+        if time.monotonic() >= self.arrival:
+            return {"msg_type": "execute_reply"}
+        await asyncio.sleep(3600 if timeout is None else timeout)   # misses the arrival
+        raise queue.Empty
+
+
+def timed(coroutine):
+    started = time.monotonic()
+    result = asyncio.run(coroutine)
+    return result, time.monotonic() - started
+
+
+def test_a_missed_wake_up_costs_one_slice_not_the_whole_timeout():
+    channel = _poll_in_slices(MissedWakeUpChannel(arrives_after=0.3), slice_s=0.1)
+    reply, seconds = timed(channel.get_msg(timeout=60))
+    assert reply == {"msg_type": "execute_reply"}
+    assert seconds < 2, seconds
+    assert all(w <= 0.1 for w in channel.waits) and len(channel.waits) >= 3
+
+
+def test_waiting_without_a_timeout_also_polls_afresh():
+    channel = _poll_in_slices(MissedWakeUpChannel(arrives_after=0.25), slice_s=0.1)
+    reply, seconds = timed(channel.get_msg())
+    assert reply["msg_type"] == "execute_reply" and seconds < 2
+
+
+def test_the_timeout_still_holds():
+    channel = _poll_in_slices(MissedWakeUpChannel(arrives_after=1e9), slice_s=0.1)
+    started = time.monotonic()
+    with pytest.raises(queue.Empty):
+        asyncio.run(channel.get_msg(timeout=0.35))
+    assert 0.3 <= time.monotonic() - started < 1.5
+    assert max(channel.waits) <= 0.1 + 1e-9

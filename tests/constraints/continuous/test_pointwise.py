@@ -1,0 +1,141 @@
+"""The exact likelihood of continuous demonstrations (mutual.constraints.continuous.pointwise, .evidence)
+against brute-force enumeration of every control sequence of a deterministic system.
+
+On a lattice-aligned system (a 1-D integrator whose every control moves a whole number of cells, the
+barycentric scheme: successors land on cell centres, interpolation is exact) the grid model is exact, so
+Z, the likelihood of a demonstration and the gain of a bound must equal enumeration to rounding. On a
+system that is not aligned (the double integrator, Monte Carlo cells) they converge to it as the cells shrink.
+"""
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from mutual.constraints.continuous import Bound, Grid, Problem, QuadraticReward, Recording, named_system
+from mutual.constraints.continuous import evidence as ev
+from mutual.constraints.continuous import pointwise as pw
+from mutual.constraints.continuous.systems import System
+
+HERE = __file__.rsplit("/", 1)[0]
+
+
+def integrator_1d(cells=13, horizon=4, temperature=0.7):
+    """x' = u on [-1.5, 1.75] with 13 cells of 0.25; u in {-0.5, 0, 0.5} for dt = 0.5: one cell per step."""
+    system = System("test_pointwise:line", ("x",), ("m",), ("u",), ("m/s",), (), {}, HERE)
+    grid = Grid.uniform([-1.625], [1.625], [cells], [False], ("x",), ("m",))
+    reward = QuadraticReward([0.75], [1.0], [0.2], [2.0], temperature)
+    return Problem(system, grid, [-0.5, 0.0, 0.5], 0.5, horizon, reward, scheme="barycentric", substeps=1)
+
+
+def line(x, u):
+    return np.asarray(u, dtype=float).copy()
+
+
+def enumerate_paths(problem, start, horizon):
+    """Every control sequence from ``start``: (states (n, T+1, d), controls (n, T, m), return R / tau)."""
+    p = problem
+    states, controls, returns = [], [], []
+    for seq in itertools.product(range(p.n_actions), repeat=horizon):
+        x = np.asarray(start, dtype=float)[None]
+        xs, us, R = [x[0]], [], 0.0
+        for a in seq:
+            u = p.controls[a][None]
+            R += float(p.reward.rate(p.grid, x, u)[0]) * p.dt
+            x = p.step(x, u)
+            xs.append(x[0])
+            us.append(u[0])
+        R += float(p.reward.terminal(p.grid, x)[0])
+        states.append(np.array(xs))
+        controls.append(np.array(us))
+        returns.append(R / p.reward.temperature)
+    return np.array(states), np.array(controls), np.array(returns)
+
+
+def log_Z(returns, keep):
+    return float(np.log(np.exp(returns[keep]).sum())) if keep.any() else -math.inf
+
+
+def recording(states, controls, dt):
+    n = len(states)
+    return Recording(tuple(f"d{i}" for i in range(n)), tuple(np.arange(s.shape[0]) * dt for s in states),
+                     tuple(states), tuple(np.vstack([c, np.full((1, c.shape[1]), np.nan)]) for c in controls))
+
+
+@pytest.mark.parametrize("bound", [None, 0.3, 0.75, 1.1])
+def test_on_a_lattice_system_log_Z_at_the_start_equals_enumeration(bound):
+    p = integrator_1d()
+    start = [0.0]
+    states, _, returns = enumerate_paths(p, start, p.horizon)
+    regions = [] if bound is None else [Bound(0, "upper", bound)]
+    keep = np.ones(len(returns), dtype=bool) if bound is None else (states[:, :, 0] <= bound).all(axis=1)
+    model = pw.point_model(p)
+    logZ = pw.log_partition(model, regions, p.reward.temperature)
+    moves = pw.point_moves(p, np.array([start]))
+    cell_ok = pw.points_allowed(model, regions).any(axis=1)
+    value = pw.point_log_values(moves, logZ[1], pw.allowed_moves(regions, moves), cell_ok, p.reward.temperature)
+    assert value[0] == pytest.approx(log_Z(returns, keep), abs=1e-9)
+
+
+def test_on_a_lattice_system_the_likelihood_and_the_gain_of_a_bound_equal_enumeration():
+    p = integrator_1d()
+    states, controls, returns = enumerate_paths(p, [0.0], p.horizon)
+    rng = np.random.default_rng(4)
+    b = 0.6
+    inside = (states[:, :, 0] <= b).all(axis=1)
+    prob = np.where(inside, np.exp(returns - returns.max()), 0.0)
+    picks = rng.choice(len(returns), size=5, p=prob / prob.sum())
+    data = ev.demonstrated(p, recording(states[picks], controls[picks], p.dt))
+    model = pw.point_model(p)
+    truth_ll = {}
+    for name, keep, regions in (("free", np.ones(len(returns), bool), []), ("bound", inside, [Bound(0, "upper", b)])):
+        ll, _ = ev.log_likelihood(model, data, regions, p.reward.temperature)
+        truth_ll[name] = float(np.sum(returns[picks]) - len(picks) * log_Z(returns, keep))
+        assert ll == pytest.approx(truth_ll[name], abs=1e-8)
+    _, logZ = ev.log_likelihood(model, data, [], p.reward.temperature)
+    gain = ev.candidate_gains(model, data, logZ, [], [Bound(0, "upper", b)], p.reward.temperature)[0]
+    assert gain == pytest.approx(truth_ll["bound"] - truth_ll["free"], abs=1e-8)
+
+
+def test_among_consistent_bounds_the_tightest_is_the_most_likely_by_enumeration():
+    """Lemma 3.2.1's argument for a family of bounds: the enumerated gain falls as the bound loosens."""
+    p = integrator_1d(horizon=5)
+    states, _, returns = enumerate_paths(p, [0.0], p.horizon)
+    free = log_Z(returns, np.ones(len(returns), bool))
+    values = [0.5, 0.55, 0.75, 1.0, 1.25]
+    gains = [free - log_Z(returns, (states[:, :, 0] <= v).all(axis=1)) for v in values]
+    assert all(a >= b for a, b in zip(gains, gains[1:])) and gains[0] > gains[-1]
+    model = pw.point_model(p)
+    data = ev.demonstrated(p, recording(states[:1] * 0 + states[:1].clip(max=0.5), np.zeros((1, 5, 1)), p.dt))
+    _, logZ = ev.log_likelihood(model, data, [], p.reward.temperature)
+    ours = ev.candidate_gains(model, data, logZ, [], [Bound(0, "upper", v) for v in values], p.reward.temperature)
+    assert np.allclose(ours, gains, atol=1e-8)
+
+
+def test_off_the_lattice_the_monte_carlo_cells_converge_to_enumeration():
+    """The double integrator (not lattice-aligned), 3 controls, T = 5: |log Z_grid - log Z_exact| at 11, 41
+    and 161 cells per coordinate, with and without a velocity bound: large on the coarsest grid, below
+    0.05 on the finer two (Monte Carlo cells: the error is not monotone in between)."""
+    di = named_system("double_integrator")
+    reward = QuadraticReward([1.0, 0.0], [1.0, 0.2], [0.1], [1.0, 0.5], 0.5)
+    start = [0.1, 0.2]
+
+    def problem(cells):
+        grid = Grid.uniform([-1.5, -2.0], [2.5, 2.0], [cells, cells], [False, False], di.state_names, di.state_units)
+        return Problem(di, grid, [-1.0, 0.0, 1.0], 0.25, 5, reward, samples=16)
+
+    states, _, returns = enumerate_paths(problem(11), start, 5)
+    errors = {}
+    for regions, keep in (([], np.ones(len(returns), bool)), ([Bound(1, "upper", 0.6)], (states[:, :, 1] <= 0.6).all(1))):
+        exact = log_Z(returns, keep)
+        for cells in (11, 41, 161):
+            p = problem(cells)
+            model = pw.point_model(p)
+            logZ = pw.log_partition(model, regions, reward.temperature)
+            moves = pw.point_moves(p, np.array([start]))
+            value = pw.point_log_values(moves, logZ[1], pw.allowed_moves(regions, moves),
+                                        pw.points_allowed(model, regions).any(axis=1), reward.temperature)[0]
+            errors[(len(regions), cells)] = abs(value - exact)
+    for k in (0, 1):
+        assert errors[(k, 41)] < 0.05 and errors[(k, 161)] < 0.05 and errors[(k, 11)] > 2 * errors[(k, 161)]

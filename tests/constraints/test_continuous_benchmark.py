@@ -1,0 +1,142 @@
+"""The continuous-constraint benchmark: its demonstrators, baselines, scorer, split and a quick run.
+
+Independent truths: the hidden regions themselves (demonstrations never enter them and ride their
+limit), braking distances in closed form, brute force for the largest empty disk and box, hand-made
+answers with known errors, and the command line against the Python API on the same files.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from mutual.constraints.continuous import Bound, Box, Disk
+from mutual.constraints.continuous.benchmark import Answer, all_cases, case_recording, cases, run_benchmark, score
+from mutual.constraints.continuous.benchmark import demonstrators, naive
+from mutual.constraints.continuous.benchmark.setups import SETUPS
+
+
+def _case(case_id):
+    return next(c for c in all_cases() if c.id == case_id)
+
+
+def test_split_holds_out_one_approached_bound_one_second_truth_and_one_unconstrained_case_per_system():
+    held = cases("held-out")
+    assert len(held) == 12 and len(cases("development")) == 24 and len(cases("all")) == 36
+    for system in SETUPS:
+        assert sorted(c.truth for c in held if c.system == system) == ["A", "B", "U"]
+    assert not {c.id for c in held} & {c.id for c in cases("development")}
+
+
+@pytest.mark.parametrize("case_id, far", [("double_integrator-A-filter-narrow", False),
+                                          ("double_integrator-F-mppi-narrow", True)])
+def test_demonstrations_never_enter_their_truth_and_ride_it_only_when_approached(case_id, far):
+    case = _case(case_id)
+    states = np.concatenate(case_recording(case).states)
+    (truth,) = case.regions()
+    assert not truth.inside(states).any()
+    extreme = states[:, truth.dim].max() if truth.side == "upper" else states[:, truth.dim].min()
+    gap = abs(extreme - truth.value)
+    assert (gap > 0.3) if far else (gap < 0.05)
+
+
+def test_braking_filter_stops_the_double_integrator_before_the_wall_in_closed_form():
+    """With full braking a = 1 m/s^2, a cart at p moving at v > 0 stops at p + v^2 / 2: the filter must
+    push (u = 1) exactly when the state after the push can still brake before the wall (up to the
+    discrete braking's v h / 2 and the last step, 0.05 m here)."""
+    setup = SETUPS["double_integrator"]
+    wall = Bound(0, "upper", 2.3)
+    ctx = demonstrators._Context(setup, [wall])
+    h = setup.demo_dt
+    p = np.linspace(1.0, 2.25, 40)
+    v = np.full_like(p, 0.8)
+    x = np.c_[p, v]
+    u = ctx.filtered(x, np.ones((len(p), 1)))[:, 0]
+    p1, v1 = p + v * h + 0.5 * h ** 2, v + h                          # after one push
+    can_stop = p1 + v1 ** 2 / 2 <= wall.value - demonstrators.MARGIN - 0.05
+    cannot = p1 + v1 ** 2 / 2 > wall.value - demonstrators.MARGIN + 0.05
+    assert can_stop.sum() > 10 and cannot.sum() > 3
+    assert np.all(u[can_stop] == 1.0) and np.all(u[cannot] < 1.0)
+
+
+def test_largest_empty_disk_matches_a_brute_force_search_over_centres():
+    rng = np.random.default_rng(3)
+    angle = rng.uniform(0, 2 * np.pi, 400)
+    ring = np.c_[np.cos(angle), np.sin(angle)] * rng.uniform(0.6, 1.5, 400)[:, None] + [0.3, -0.2]
+    disk = naive.largest_empty_disk(ring)
+    g = np.linspace(-1.0, 1.0, 201)
+    centres = np.stack(np.meshgrid(g + 0.3, g - 0.2), axis=-1).reshape(-1, 2)
+    radius = np.min(np.linalg.norm(centres[:, None] - ring[None], axis=2), axis=1)
+    assert disk.radius == pytest.approx(radius.max(), abs=0.01)
+    assert np.hypot(*np.subtract(disk.center, (0.3, -0.2))) < 0.15
+
+
+def test_largest_empty_box_matches_brute_force_over_raster_rectangles():
+    rng = np.random.default_rng(5)
+    points = rng.uniform(0, 1, size=(25, 2))
+    R = 12
+    box = naive.largest_empty_box(points, raster=R)
+    cell = np.minimum((points - points.min(0)) / ((points.max(0) - points.min(0)) / R), R - 1).astype(int)
+    full = np.zeros((R, R), dtype=bool)
+    full[cell[:, 0], cell[:, 1]] = True
+    best = max((i1 - i0) * (j1 - j0) for i0 in range(R) for i1 in range(i0 + 1, R + 1) for j0 in range(R)
+               for j1 in range(j0 + 1, R + 1) if not full[i0:i1, j0:j1].any())
+    size = (points.max(0) - points.min(0)) / R
+    area = (box.high[0] - box.low[0]) * (box.high[1] - box.low[1])
+    assert area == pytest.approx(best * size[0] * size[1])
+    assert not box.inside(points).any()
+
+
+def test_naive_pick_takes_the_side_the_trajectories_ride_and_ignores_angles_that_wrap():
+    t = np.linspace(0, 1, 500)
+    states = np.c_[np.linspace(-3, 3, 500), np.minimum(3 * t, 1.2) - 0.5]   # the second rides 0.7 for 60 %
+    bound = naive.naive_pick(states, np.array([-3.2, -2.0]), np.array([3.2, 2.0]), [True, False])
+    assert (bound.dim, bound.side) == (1, "upper") and bound.value == pytest.approx(0.7)
+
+
+@pytest.mark.parametrize("regions, truth, expected", [
+    ((Bound(1, "upper", 5.2), Bound(1, "upper", 5.05)), [Bound(1, "upper", 5.0)],
+     {"kind right": True, "error": 0.05, "false positives": 0}),
+    ((Bound(0, "lower", -1.0), Bound(1, "upper", 5.1)), [Bound(1, "upper", 5.0)],
+     {"kind right": False, "error": 0.1, "false positives": 1}),
+    ((Bound(1, "lower", -4.0),), [Bound(1, "upper", 5.0)], {"kind right": False, "false positives": 1}),
+    ((), [], {"kind right": True, "false positives": 0}),
+    ((Bound(0, "upper", 3.0),), [], {"kind right": False, "false positives": 1}),
+    ((Disk((0, 1), (0.3, 0.4), 0.7), Disk((0, 1), (3.0, 2.0), 0.4)), [Disk((0, 1), (0.0, 0.0), 0.8)],
+     {"kind right": True, "error": 0.5, "size error": 0.1, "false positives": 1}),
+    ((Box((0, 1), (-0.5, -1.0), (0.5, 0.6)),), [Box((0, 1), (-0.4, -1.2), (0.6, 0.4))],
+     {"kind right": True, "error": math.hypot(0.1, 0.2), "size error": 0.0, "false positives": 0}),
+    ((Disk((0, 1), (0.0, 0.0), 0.8),), [Box((0, 1), (-0.4, -1.2), (0.6, 0.4))], {"kind right": False}),
+])
+def test_score_of_hand_made_answers(regions, truth, expected):
+    got = score(Answer(regions, (0.3,) * len(regions)), truth)
+    for key, value in expected.items():
+        assert got[key] == (pytest.approx(value) if isinstance(value, float) else value), key
+    if "error" not in expected and truth:
+        assert math.isnan(got["error"])
+
+
+def test_score_counts_accepted_constraints_that_lowered_the_exact_likelihood():
+    got = score(Answer((Bound(1, "upper", 5.1), Bound(0, "lower", 1.0)), (0.4, -0.2)), [Bound(1, "upper", 5.0)])
+    assert got["lowered likelihood"] == 1
+    assert score(Answer((Bound(1, "upper", 5.1),), None), [Bound(1, "upper", 5.0)])["lowered likelihood"] is None
+
+
+def test_quick_benchmark_runs_every_method_and_the_command_line_agrees_with_the_python_api():
+    """The quick suite (make test): a pendulum speed limit (run through the command line) and an
+    unconstrained double integrator. The naive bound's error is the recorded extreme's distance to
+    the truth; on the unconstrained case it always answers (one false positive)."""
+    frame = run_benchmark("development", quick=True)
+    assert list(frame["case"]) == ["pendulum-A-filter-narrow", "double_integrator-U-lagged-wide"]
+    pendulum, free = frame.iloc[0], frame.iloc[1]
+    states = np.concatenate(case_recording(_case("pendulum-A-filter-narrow")).states)
+    assert pendulum["naive: error"] == pytest.approx(5.0 - states[:, 1].max())
+    assert free["naive: false positives"] == 1 and math.isnan(free["naive: error"])
+    for method in ("inference", "naive", "kkt"):
+        assert not str(pendulum[f"{method}: note"]).startswith("FAILED"), pendulum[f"{method}: note"]
+    from mutual.constraints.continuous.benchmark.methods import inference_answer
+    case = _case("pendulum-A-filter-narrow")
+    api = inference_answer(case.setup.system_file(), case_recording(case))
+    assert pendulum["inference: chosen"] == ("; ".join(
+        f"{('theta', 'theta_dot')[r.dim]} {'<=' if r.side == 'upper' else '>='} {r.value:.3f}" for r in api.regions)
+        or "none")

@@ -1,0 +1,239 @@
+"""What users get wrong in continuous recordings and system files, refused or warned with the reason.
+
+The recordings are made here by integrating the true dynamics forward (the truth a forward recording
+follows); each mistake is then made on purpose -- t reversed, degrees, controls in another unit, a
+repeated column, too many steps -- and its siblings (rows in reverse order with t, which is fine) pass."""
+
+import json
+import textwrap
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from mutual.cli import main
+from mutual.constraints.continuous import (Grid, Problem, QuadraticReward, integrate, load_system, named_system,
+                                           read_recording, system_from_mapping)
+from mutual.constraints.continuous.mapping import check_recording
+from mutual.inputs import InputWarning
+
+SYSTEM = named_system("pendulum")
+GRID = Grid.uniform([-np.pi, -8.0], [np.pi, 8.0], [9, 9], [True, False], SYSTEM.state_names, SYSTEM.state_units)
+
+
+def _problem(horizon=10):
+    return Problem(SYSTEM, GRID, [-3.0, 0.0, 3.0], 0.1, horizon, QuadraticReward([np.pi, 0], [1, 0.1], [0.0], [1, 1]))
+
+
+def _recorded(n=4, steps=10, seed=0):
+    """Forward recordings of the pendulum under random controls of the set, as the CSV table."""
+    rng = np.random.default_rng(seed)
+    x = np.column_stack([rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)])
+    rows = []
+    for k in range(steps + 1):
+        u = rng.choice([-3.0, 0.0, 3.0], size=n)
+        for d in range(n):
+            rows.append({"demo": f"demo-{d:03d}", "t": round(0.1 * k, 10), "theta": x[d, 0], "theta_dot": x[d, 1],
+                         "torque": u[d] if k < steps else np.nan})
+        x = GRID.wrap(integrate(SYSTEM, x, u[:, None], 0.1))
+    return pd.DataFrame(rows)
+
+
+def _check(tmp_path, frame=None, text=None, horizon=10):
+    path = tmp_path / "t.csv"
+    if text is None:
+        frame.to_csv(path, index=False)
+    else:
+        path.write_text(text)
+    check_recording(_problem(horizon), read_recording(path, SYSTEM.state_names, SYSTEM.control_names))
+
+
+GOOD = _recorded()
+REFUSED = [  # (case, the recording as a table or CSV text, the horizon, phrases of the error)
+    ("t as a time-to-go", GOOD.assign(t=1.0 - GOOD["t"]), 10, ["column 't'", "runs backwards in time"]),
+    ("t with the wrong sign", GOOD.assign(t=-GOOD["t"]), 10, ["runs backwards in time", "make t increase"]),
+    ("longer than the horizon", GOOD, 6, ["span 10 steps", "more than the horizon T = 6", "[time] horizon"]),
+    ("one step longer than the horizon", GOOD, 9, ["more than the horizon T = 9"]),
+    ("a repeated column", GOOD.to_csv(index=False).replace("theta_dot", "theta", 1), 10,
+     ["line 1", "'theta' appears twice"]),
+    ("a name with a trailing space", GOOD.assign(demo=GOOD["demo"].where(GOOD.index != 5, "demo-001 ")), 10,
+     ["'demo-001' (line 3)", "'demo-001 ' (line 7)", "differ only in spaces"]),
+    ("a comma after every data row", GOOD.to_csv(index=False).replace("\n", ",\n").replace("torque,\n", "torque\n", 1),
+     10, ["line 2", "every data row has more fields than the header (6 against 5)"]),
+]
+
+
+@pytest.mark.parametrize("case, data, horizon, phrases", REFUSED, ids=[c[0] for c in REFUSED])
+def test_mistakes_in_recordings_are_refused_with_the_reason(case, data, horizon, phrases, tmp_path):
+    with pytest.raises(ValueError) as err:
+        _check(tmp_path, *((data, None) if isinstance(data, pd.DataFrame) else (None, data)), horizon=horizon)
+    assert all(p in str(err.value) for p in phrases), err.value
+
+
+WARNED = [  # (case, the recording, phrases of the warning)
+    ("theta in degrees", GOOD.assign(theta=np.degrees(GOOD["theta"]) * 3), ["column 'theta'", "look like degrees"]),
+    ("torque in N cm", GOOD.assign(torque=GOOD["torque"] * 100),
+     ["column 'torque'", "recorded 'torque' values lie more than the control set's width outside it ([-3, 3]",
+      "check the unit"]),
+    ("one torque far outside", GOOD.assign(torque=GOOD["torque"].where(GOOD.index != 9, 40.0)),
+     ["line 11, column 'torque'", "1 of 40 recorded"]),
+]
+
+
+@pytest.mark.parametrize("case, data, phrases", WARNED, ids=[c[0] for c in WARNED])
+def test_likely_unit_mistakes_are_warned_about(case, data, phrases, tmp_path):
+    with pytest.warns(InputWarning) as record:
+        _check(tmp_path, data)
+    assert any(all(p in str(w.message) for p in phrases) for w in record), [str(w.message) for w in record]
+
+
+@pytest.mark.parametrize("case, data", [
+    ("as recorded", GOOD),
+    ("at rest", GOOD.assign(theta=0.0, theta_dot=0.0, torque=0.0)),
+    ("rows in reverse order, t with them", GOOD.iloc[::-1]),
+    ("torques slightly beyond the set", GOOD.assign(torque=GOOD["torque"] * 1.5)),
+    ("exactly the horizon", GOOD),
+    ("angles that wind past the box by less than a turn", GOOD.assign(theta=GOOD["theta"] + 2 * np.pi)),
+])
+def test_plausible_recordings_pass_without_a_word(case, data, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputWarning)
+        _check(tmp_path, data)
+
+
+# ---- system files -------------------------------------------------------------------------------
+
+PLANAR = textwrap.dedent("""\
+    system = "{spec}"
+    [state]
+    names = ["x", "y"]
+    units = ["m", "m"]
+    low = [0.0, 0.0]
+    high = [3.0, 2.0]
+    cells = [9, 6]
+    [control]
+    names = ["vx", "vy"]
+    units = ["m/s", "m/s"]
+    values = {values}
+    [time]
+    dt = 0.25
+    horizon = 12
+    [reward]
+    goal = [2.75, 1.0]
+    state_weights = [1.0, 1.0]
+    [simulate]
+    hidden = ["y <= 1.4"]
+    start = {start}
+    n = 6
+    fine_cells = [18, 12]
+    """)
+CONTROLS_2D = "[[1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 0.0]]"
+MODULES = {
+    "planar": "import numpy as np\ndef f(x, u, speed=1.0):\n    return speed * np.asarray(u, dtype=float)\n",
+    "one_state": "import numpy as np\ndef f(x, u):\n    px, py = x\n    return np.array([u[0], u[1]])\n",
+    "one_row": "import numpy as np\ndef f(x, u):\n    return np.array([u[0], u[1]])\n",
+    "exits": "import sys\nsys.exit(0)\n",
+    "raises": "raise RuntimeError('licence server unreachable')\n",
+    "fails_later": "import numpy as np\ndef f(x, u):\n    if (x[:, 0] > 2.9).any():\n        raise ArithmeticError("
+                   "'left the table')\n    return np.asarray(u, float)\n",
+}
+
+
+def _system(tmp_path, spec="planar:f", values=CONTROLS_2D, start="[0.25, 1.0]"):
+    for name, source in MODULES.items():
+        (tmp_path / f"{name}.py").write_text(source)
+    path = tmp_path / f"{spec.split(':')[0]}.toml"
+    path.write_text(PLANAR.format(spec=spec, values=values, start=start))
+    return path
+
+
+def test_a_two_dimensional_control_set_is_read(tmp_path):
+    problem = load_system(_system(tmp_path)).problem
+    assert problem.controls.tolist() == [[1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 0.0]]
+    assert problem.system.file == str((tmp_path / "planar.py").resolve())
+
+
+SYSTEM_MISTAKES = [  # (case, spec, [control] values, [simulate] start, phrases of the error)
+    ("a control of the wrong length", "planar:f", "[[1.0, 0.0], [0.0]]", "[0.25, 1.0]",
+     ["key 'control.values'", "each a list of 2 numbers"]),
+    ("a control that is not a number", "planar:f", "[[1.0, 0.0], [0.0, 'up']]", "[0.25, 1.0]",
+     ["key 'control.values[1]': must be a list of 2 numbers, got [0.0, 'up']"]),
+    ("dynamics for one state at a time (unpacking)", "one_state:f", CONTROLS_2D, "[0.25, 1.0]",
+     ["key 'system'", "one_state.py", "written for one state at a time", "x[:, 0]"]),
+    ("dynamics for one state at a time (one row back)", "one_row:f", CONTROLS_2D, "[0.25, 1.0]",
+     ["key 'system'", "returned shape (2, 2) for states of shape (4, 2)", "written for one state at a time"]),
+    ("sys.exit(0) at import", "exits:f", CONTROLS_2D, "[0.25, 1.0]",
+     ["key 'system'", "importing module 'exits'", "exits.py", "called sys.exit(0)"]),
+    ("a raise at import", "raises:f", CONTROLS_2D, "[0.25, 1.0]",
+     ["importing module 'raises'", "raised RuntimeError: licence server unreachable at line 1 of"]),
+    ("a start inside the hidden region", "planar:f", CONTROLS_2D, "[0.25, 1.6]",
+     ["key 'simulate.start'", "[0.25, 1.6] lies inside the hidden region 'y <= 1.4'"]),
+]
+
+
+@pytest.mark.parametrize("case, spec, values, start, phrases", SYSTEM_MISTAKES, ids=[c[0] for c in SYSTEM_MISTAKES])
+def test_mistakes_in_system_files_name_the_file_and_the_key(case, spec, values, start, phrases, tmp_path):
+    path = _system(tmp_path, spec, values, start)
+    with pytest.raises(ValueError) as err:
+        load_system(path)
+    assert str(err.value).startswith(str(path)) and all(p in str(err.value) for p in phrases), err.value
+
+
+@pytest.mark.parametrize("low, high, phrase", [
+    ([-180.0, -8.0], [180.0, 8.0], "wraps with period high - low = 360, not 2 pi = 6.28319 (degrees?)"),
+    ([0.0, -8.0], [3.14159, 8.0], "wraps with period high - low = 3.14159, not 2 pi"),
+])
+def test_a_periodic_angle_whose_box_is_not_one_turn_in_radians_is_refused(low, high, phrase):
+    mapping = {"system": "pendulum", "state": {"low": low, "high": high, "cells": [9, 9], "periodic": ["theta"]},
+               "control": {"values": [-3.0, 3.0]}, "time": {"dt": 0.1, "horizon": 10}, "reward": {"goal": [0.0, 0.0]}}
+    with pytest.raises(ValueError, match=r"s\.toml: key 'state\.high': the periodic coordinate 'theta' \(rad\)"):
+        system_from_mapping(mapping, "s.toml")
+    with pytest.raises(ValueError) as err:
+        system_from_mapping(mapping, "s.toml")
+    assert phrase in str(err.value)
+    mapping["state"].update(low=[0.0, -8.0], high=[2 * np.pi, 8.0])
+    system_from_mapping(mapping, "s.toml")                                   # [0, 2 pi] is one turn too
+
+
+def test_the_cli_runs_a_two_dimensional_control_end_to_end(tmp_path, capsys):
+    """simulate writes both control columns; infer-continuous reads them back and snaps every recorded step to
+    a control of the 2-D set (the demonstrator used only controls of the set: each snaps to itself)."""
+    path = _system(tmp_path)
+    assert main(["constraints", "simulate", "--system", str(path), "--out", str(tmp_path / "sim"),
+                 "--no-progress", "--json"]) == 0
+    simulated = json.loads(capsys.readouterr().out)
+    assert simulated["dynamics_file"] == str((tmp_path / "planar.py").resolve())
+    table = pd.read_csv(tmp_path / "sim" / "trajectories.csv")
+    assert {"vx", "vy"} <= set(table.columns) and (table["y"] <= 1.4 + 1e-9).all()
+    recorded = table[["vx", "vy"]].dropna().to_numpy()
+    assert {tuple(u) for u in recorded} <= {(1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (-1.0, 0.0), (0.0, 0.0)}
+    assert main(["constraints", "infer-continuous", str(tmp_path / "sim" / "trajectories.csv"), "--system", str(path),
+                 "--inline", "--rounds", "1", "--out", str(tmp_path / "inf"), "--no-progress", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["controls"]["recorded_snapped"] == 6 * 12 and result["n_controls"] == 5
+
+
+def test_the_cli_names_the_system_file_for_a_failure_inside_the_dynamics(tmp_path, capsys):
+    trajectories = tmp_path / "t.csv"
+    trajectories.write_text("demo,t,x,y\na,0,0.25,1\na,0.25,0.5,1\n" + "".join(
+        f"a,{0.25 * k:g},{min(0.25 * (k + 1), 2.95):g},1\n" for k in range(2, 13)))
+    path = _system(tmp_path, "fails_later:f")
+    status = main(["constraints", "infer-continuous", str(trajectories), "--system", str(path), "--inline",
+                   "--rounds", "1", "--out", str(tmp_path / "o"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert status == 2 and err.startswith(f"mutual constraints infer-continuous: error: {path}: key 'system': ")
+    assert "fails_later.py" in err and "raised ArithmeticError: left the table at line 4 of" in err
+
+
+def test_the_cli_refuses_a_hidden_region_given_on_the_command_line_around_the_start(tmp_path, capsys):
+    path = _system(tmp_path)
+    status = main(["constraints", "simulate", "--system", str(path), "--hidden", "x <= 0.1", "--out",
+                   str(tmp_path / "o"), "--no-progress"])
+    assert status == 2 and "lies inside the hidden region 'x <= 0.1'" in capsys.readouterr().err
+
+
+def test_a_system_mapping_still_reads_without_a_file():
+    mapping = {"system": "pendulum", "state": {"low": [-3.14, -8.0], "high": [3.14, 8.0], "cells": [9, 9]},
+               "control": {"values": [-3.0, 3.0]}, "time": {"dt": 0.1, "horizon": 10}, "reward": {"goal": [3.14, 0.0]}}
+    assert system_from_mapping(mapping, "inline").problem.system.file is None
