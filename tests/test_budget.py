@@ -174,3 +174,33 @@ def test_candidate_regions_count_the_families():
     assert budget.candidate_regions((41, 41), ("bound",)) == 2 * 80
     assert budget.candidate_regions((41, 41), ("cell",)) == 41 * 41
     assert budget.candidate_regions((41, 41), ("disk", "box"), every=2, radii=3, half_widths=2) == 21 * 21 * 5
+
+
+def _continuous_entry_points():
+    """Each continuous entry point with a request beyond any machine, and a word its refusal must carry."""
+    from mutual.constraints.continuous import (mppi_rollouts, point_model, rollout, soft_demonstrator,
+                                               starts_around)
+    small = _pendulum((11, 11), "sample")
+    return [
+        ("point_model", lambda: point_model(_pendulum((41, 41), "sample").replace(samples=10 ** 9)), "samples"),
+        ("soft_demonstrator", lambda: soft_demonstrator(small, [], (10 ** 5, 10 ** 5)), "demonstrator cells"),
+        ("mppi_rollouts", lambda: mppi_rollouts(small.replace(horizon=10 ** 9), [], np.full((100, 2), 0.1)),
+         "demonstrations"),
+        ("starts_around", lambda: starts_around([0.0, 0.0], [0.1, 0.1], 10 ** 12), "starts"),
+        ("rollout", lambda: rollout(_Demonstrator(small.replace(horizon=10 ** 9)), np.full((100, 2), 0.1)),
+         "demonstrations"),
+    ]
+
+
+class _Demonstrator:
+    """Just enough of a SoftDemonstrator for :func:`rollout` to size its request."""
+    def __init__(self, problem):
+        self.problem = problem
+
+
+@pytest.mark.parametrize("index", range(5), ids=["point_model", "soft_demonstrator", "mppi_rollouts",
+                                                 "starts_around", "rollout"])
+def test_continuous_entry_points_refuse_before_they_allocate(index):
+    name, call, word = _continuous_entry_points()[index]
+    message = _refused_quickly(call)
+    assert word in message and ("GiB" in message or "TiB" in message), (name, message)

@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ... import budget
 from ..mdp import expected_next, masked_logsumexp
 from .discretization import discretize
 from .grid import Grid
@@ -81,6 +82,8 @@ def soft_demonstrator(problem, hidden, cells, controls=None, temperature=None, s
     and ``temperature`` (default: the problem's). Its grid forbids, with probability 0, every cell that
     touches a hidden region (:func:`touching`): it keeps the margin a cell's extent needs."""
     g = problem.grid
+    n_controls = len(problem.controls if controls is None else controls)
+    budget.check(budget.soft_demonstrator(cells, n_controls, problem.horizon))
     fine_grid = Grid.uniform(g.low, g.high, cells, g.periodic, g.names, g.units)
     reward = problem.reward if temperature is None else replace(problem.reward, temperature=float(temperature))
     fine = problem.replace(grid=fine_grid, controls=problem.controls if controls is None else controls,
@@ -118,6 +121,7 @@ def rollout(demonstrator, starts, seed=0, noise=0.0, record_every=1):
     rng = np.random.default_rng(seed)
     x = p.grid.wrap(np.atleast_2d(np.asarray(starts, dtype=float)))
     N, A = len(x), p.n_actions
+    budget.check(budget.rollouts(N, p.horizon, p.grid.ndim, A, record_every=record_every))
     if np.isneginf(dem.V[0][p.grid.cell_of(x)]).any():
         raise ValueError(f"demonstrator: on its {' x '.join(map(str, p.grid.shape))} grid no trajectory from some start "
                          "avoids the hidden regions (V = -inf there); use a finer demonstrator grid")
@@ -169,6 +173,8 @@ def mppi_rollouts(problem, hidden, starts, seed=0, samples=256, plan_steps=20, s
     span = np.where(hi > lo, hi - lo, 1.0)
     x = problem.grid.wrap(np.atleast_2d(np.asarray(starts, dtype=float)))
     N, m = x.shape[0], lo.size
+    budget.check(budget.rollouts(N, problem.horizon, problem.grid.ndim, record_every=record_every, plans=samples,
+                                 plan_steps=plan_steps))
     U = np.zeros((N, plan_steps, m))
     planned = [region.inflated(margin) for region in hidden]
     states, controls = [[row] for row in x], [[] for _ in range(N)]
@@ -222,5 +228,6 @@ def starts_around(start, spread, n, seed=0):
     """``n`` start states uniformly within ``start`` +- ``spread`` (per coordinate)."""
     rng = np.random.default_rng(seed)
     start, spread = np.asarray(start, dtype=float), np.asarray(spread, dtype=float)
+    budget.check(budget.array((n, start.size), what="start states", knob="ask for fewer starts (n)"))
     return start + spread * rng.uniform(-1.0, 1.0, size=(int(n), start.size))
 

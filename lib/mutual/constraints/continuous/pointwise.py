@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ... import budget
 from .discretization import kuhn_weights
 
 SEGMENT_POINTS = 3      # interior points at which a move's straight segment is checked against obstacles
@@ -118,6 +119,7 @@ def point_model(problem, progress=None):
     is called as blocks of cells are integrated."""
     g, A = problem.grid, problem.n_actions
     M = problem.samples if problem.scheme == "sample" else 1
+    budget.check(budget.discretization(g.shape, A, M, problem.scheme))
     rng = np.random.default_rng([problem.seed, 7])
     if problem.scheme == "sample":
         low, width = g.cell_boxes(np.arange(g.n_cells))
