@@ -44,6 +44,7 @@ ILQR_STEP_SECONDS = 5e-4         # one step of one hypothesis of the Dubins car'
 HJ_NODE_SECONDS = 2.3e-5         # one grid node of one value function (hj-reachability, to convergence)
 CLOSED_FORM_NODE_SECONDS = 2e-7  # one grid node of one value function in closed form
 PARTICIPANT_SECONDS = 0.32       # one simulated participant of the power sweep (full grid, 60-s trials)
+SAMPLE_SIZE_SECONDS = 5e-4       # one sample size of G*Power's table: its noncentral F power (scipy)
 GRID_BACKUP_SECONDS = 4e-8       # one (round, candidate, step, state, action) of gridworld inference
 
 CSV_BYTE_SECONDS = 3e-7          # one byte of a CSV file: split into lines, checked, parsed into text cells
@@ -301,6 +302,12 @@ def value_library(members, shape, computed=None, method="hj"):
     return Estimate(f"{int(members):,} value functions on {_x(shape)} nodes ({int(computed):,} to compute)",
                     4.0 * nodes * (members + 12), per_node * nodes * computed,
                     "use fewer library members (--w-max) or a smaller grid (--grid quick)")
+
+
+def sample_sizes(count, what="--n"):
+    """G*Power's analytic power at ``count`` sample sizes (``what``: as the user asked for them), a row each."""
+    return Estimate(f"{int(count):,} sample sizes ({what})", 200.0 * count, SAMPLE_SIZE_SECONDS * count,
+                    "list fewer sample sizes (--n a:b:step with a larger step)")
 
 
 def power_simulation(cohorts, participants, workers=1):
