@@ -71,6 +71,10 @@ CASES = [
     ({}, ["supervisor", "fit", str(EXAMPLES / "interventions.csv"), "--w-max", W_MAX],
      ["551 value functions on 101 x 101 x 64 nodes", "--w-max"]),
     ({}, ["study", "power", "--cohorts", "5000", "--n", "40"], ["5,000 simulated cohorts of 40", "--cohorts"]),
+    ({}, ["supervisor", "fit", str(EXAMPLES / "interventions.csv"), "--w-max",
+          ",".join(f"{0.01 * k:.2f}" for k in range(41, 241))],
+     ["200 value functions on 101 x 101 x 64 nodes", "minutes", "--w-max", "--grid quick"]),
+    ({}, ["study", "power", "--f", "0.25", "--n", "3:100000000"], ["99,999,998 sample sizes", "hours", "--n a:b:step"]),
 ]
 
 
