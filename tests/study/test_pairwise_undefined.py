@@ -14,8 +14,8 @@ import pytest  # noqa: E402
 from scipy import stats  # noqa: E402
 from statsmodels.stats.multitest import multipletests  # noqa: E402
 
-from mutual.study import DegenerateDataError, pairwise_comparisons, paired_t_holm, plot_condition_means, rm_anova  # noqa: E402
-from mutual.study.plots import MAX_SUBJECT_LINES  # noqa: E402
+from mutual.study import (MAX_SUBJECT_LINES, DegenerateDataError, paired_t_holm, pairwise_comparisons,  # noqa: E402
+                          plot_condition_means, rm_anova)
 
 # (subject x level table, the pairs without a t, a fragment of the first one's reason)
 CASES = [

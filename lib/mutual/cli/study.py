@@ -213,7 +213,7 @@ def _figure(anova, pairwise, args):
                   + ("\nmean per subject and level" if args.aggregate else ""))
     # the title in lines no wider than the axes (a long one was cut at the figure's right edge)
     pairs = "brackets: Tukey HSD p" if brackets is not None else f"{len(pairwise)} pairs: Tukey HSD p in the pairwise table"
-    from ..study.plots import MAX_SUBJECT_LINES
+    from ..study import MAX_SUBJECT_LINES
     grey = "grey: subjects" if anova.n_subjects <= MAX_SUBJECT_LINES else \
         f"subjects not drawn (more than {MAX_SUBJECT_LINES})"
     ax.set_title(f"means with standard-error bars (n = {anova.n_subjects})\n{grey}; {pairs}", fontsize=8)
