@@ -28,7 +28,7 @@ import numpy as np
 
 from mutual.constraints.complexity import best_time
 from mutual.supervision import explore, fit as fit_module, reachability, value_cache
-from mutual.supervision.dubins import DubinsCar
+from mutual.dubins import DubinsCar
 from mutual.supervision.fit import LibraryEdgeWarning, fit_supervisor
 from mutual.supervision.reachability import (FULL_GRID, QUICK_GRID, SolverSpec, _initial_values, closed_form_agreement,
                                              value_library)

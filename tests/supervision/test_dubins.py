@@ -6,7 +6,8 @@ import re
 import numpy as np
 import pytest
 
-from mutual.supervision.dubins import (DubinsCar, avoid_value_closed_form, check_states, dubins_step, keep_out_margin,
+from mutual.dubins import DubinsCar
+from mutual.supervision.dubins import (avoid_value_closed_form, check_states, dubins_step, keep_out_margin,
                                        rotate_to_heading, unsafe_reach)
 from mutual.supervision.reachability import QUICK_GRID, value_library
 

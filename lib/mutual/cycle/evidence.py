@@ -7,50 +7,23 @@ Hypotheses (chapter 7's structure, eqs. 7.3-7.4, with the learned safe set in pl
     J1(u) = J0(u) + a_safe dt sum_k softplus_s(level - V(x_k))^2             (H1: avoids {V < level})
 
 where V is the avoid value of eq. (4.3) for a Dubins car with turn rate ``w_max`` around the disk
-obstacle (the closed form of :mod:`mutual.supervision.dubins`, here in JAX so iLQR can differentiate
-it) and softplus_s(z) = s log(1 + e^{z / s}) a smooth hinge. The legible robot minimises
+obstacle (the closed form in JAX, :func:`mutual.dubins.avoid_value_jax`, so iLQR can differentiate it;
+its kinks rounded at width ``smoothing``) and softplus_s(z) = s log(1 + e^{z / s}) a smooth hinge. The legible robot minimises
 (1 + alpha) J1 - J0 (eq. 6.15), the same feature cost with weights (1 + alpha) w1 - w0.
 """
 
 from dataclasses import dataclass, replace
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 
 from scipy import stats
 
-from ..motion import dubins_step
-from ..supervision import SPEED, TRUE_W_MAX, avoid_value_closed_form
+from ..dubins import SPEED, TRUE_W_MAX, step_jax
+from ..dubins import avoid_value_jax as avoid_value  # the closed form in JAX, kinks rounded
+from ..supervision import avoid_value_closed_form
 from .laplace import best_tail, posterior_over_time, prefix_log_likelihoods
-
-
-def avoid_value(x, w_max, radius, speed=SPEED, smoothing=0.0):
-    """The avoid value V(x) of a Dubins car around a disk at the origin (closed form, no disturbance):
-    |p| - r when not approaching, else max over the two turning circles of ||c| - R| - r (JAX).
-
-    ``smoothing`` > 0 rounds its three kinks at that width (the max by a log-sum-exp, |.| by
-    sqrt(z^2 + s^2), the switch at p . h = 0 by a logistic blend of the branches, which agree there), so
-    that iLQR's Newton steps see a twice-differentiable cost; 0 gives the exact closed form.
-    """
-    p = x[:2]
-    heading = jnp.stack([jnp.cos(x[2]), jnp.sin(x[2])])
-    normal = jnp.stack([-jnp.sin(x[2]), jnp.cos(x[2])])
-    big_r = speed / w_max
-
-    def norm(v):
-        return jnp.sqrt(jnp.sum(v ** 2) + 1e-12)
-
-    gaps = [norm(p + big_r * normal) - big_r, norm(p - big_r * normal) - big_r]
-    if isinstance(smoothing, (int, float)) and smoothing == 0:
-        turning = jnp.maximum(jnp.abs(gaps[0]), jnp.abs(gaps[1]))
-        return jnp.where(p @ heading < 0, turning, norm(p)) - radius
-    s = smoothing
-    a, b = (jnp.sqrt(g ** 2 + s ** 2) for g in gaps)
-    turning = s * jnp.logaddexp(a / s, b / s)
-    weight = jax.nn.sigmoid(-(p @ heading) / s)
-    return weight * turning + (1 - weight) * norm(p) - radius
 
 
 def softplus(z, s):
@@ -59,7 +32,7 @@ def softplus(z, s):
 
 
 def _dynamics(x, u, params):
-    return dubins_step(x, u, params["dt"], params["speed"])
+    return step_jax(x, u, params["dt"], params["speed"])
 
 
 def _running(x, u, params):

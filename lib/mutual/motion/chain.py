@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .riccati import LQStage, positive_definite, riccati_step
+
 DENSE_LIMIT_BYTES = 2 * 2 ** 30        # the dense forms (checks on small problems) refuse above this
 _HALF_LOG_2PI = 0.5 * np.log(2 * np.pi)
 
@@ -253,30 +255,26 @@ def lq_chains(dynamics, costs, x0, N):
 def riccati_factor(A, B, Hz, gz, VN, vN, what="the cost"):
     """The Riccati backward pass of ``P`` problems sharing the dynamics ``A`` (N, n, n), ``B`` (N, n, m):
     stage costs ``1/2 z'Hz z + gz'z`` in ``z = (x, u)`` (``Hz`` (P, N, n+m, n+m), ``gz`` (P, N, n+m)),
-    terminal ``1/2 x'VN x + vN'x``. Returns the policy ``u = K x + k`` (``K`` (P, N, m, n), ``k`` (P, N, m))
-    and the lower Cholesky factors ``L`` (P, N, m, m) of ``Q_uu``. A ``Q_uu`` that is not positive
-    definite (the precision is not, eq. (6.8) has no density) raises a ValueError naming ``what`` and the stage."""
+    terminal ``1/2 x'VN x + vN'x``; each stage is :func:`mutual.motion.riccati.riccati_step`. Returns the
+    policy ``u = K x + k`` (``K`` (P, N, m, n), ``k`` (P, N, m)) and the lower Cholesky factors ``L``
+    (P, N, m, m) of ``Q_uu``. A ``Q_uu`` that is not positive definite (the precision is not, eq. (6.8) has
+    no density) raises a ValueError naming ``what`` and the stage."""
     P, N = Hz.shape[:2]
     n, m = B.shape[-2:]
     K, k, L = np.empty((P, N, m, n)), np.empty((P, N, m)), np.empty((P, N, m, m))
+    Quu = np.empty((P, N, m, m))
     V, v = np.array(VN, float), np.array(vN, float)
-    AB = np.concatenate([A, B], axis=2)
-    ABT = AB.transpose(0, 2, 1)
+    F = np.concatenate([A, B], axis=2)
     with np.errstate(over="ignore", invalid="ignore"):
         for t in range(N - 1, -1, -1):
-            Z = Hz[:, t] + ABT[t] @ V @ AB[t]                            # [[Q_xx, Q_xu], [Q_ux, Q_uu]]
-            g = gz[:, t] + v @ AB[t]
-            quu = Z[:, n:, n:]
-            try:
-                L[:, t] = np.linalg.cholesky(quu)
-            except np.linalg.LinAlgError:
-                raise ValueError(f"{what}: its control Hessian Q_uu = R + B'VB at stage {t} is not positive "
-                                 "definite") from None
-            X = np.linalg.solve(quu, np.concatenate([Z[:, n:, :n], g[:, n:, None]], axis=2))
-            K[:, t], k[:, t] = -X[..., :n], -X[..., n]
-            V = Z[:, :n, :n] - Z[:, :n, n:] @ X[..., :n]
-            V = 0.5 * (V + V.transpose(0, 2, 1))
-            v = g[:, :n] - (Z[:, :n, n:] @ X[..., n:])[..., 0]
+            step = riccati_step(V, v, LQStage(F=F[t], H=Hz[:, t], g=gz[:, t]))
+            K[:, t], k[:, t], L[:, t], Quu[:, t] = step.K, step.k, step.L, step.Q_uu
+            V, v = step.V, step.v
+    # the first stage (from the end) whose finite Q_uu has no Cholesky factor; the stages before it are NaN
+    refused = ~positive_definite(L) & np.isfinite(Quu).all(axis=(-2, -1))
+    if refused.any():
+        raise ValueError(f"{what}: its control Hessian Q_uu = R + B'VB at stage {np.nonzero(refused)[1].max()} is "
+                         "not positive definite")
     if not (np.all(np.isfinite(K)) and np.all(np.isfinite(k)) and np.all(np.isfinite(L))):
         raise NotRepresentable(f"{what}: the Riccati backward pass overflowed float64; rescale the problem "
                                "(its positions, weights or time step)")

@@ -11,9 +11,9 @@ STARTS = (0.0, 0.5, -0.5, 1.0, -1.0)    # constant turn rates (rad/s) iLQR start
 
 
 def step(x, u, params):
-    """One step of the car (:func:`mutual.motion.evident.vehicles.dubins_step`)."""
-    from .evident.vehicles import dubins_step
-    return dubins_step(x, u, params["dt"], params["speed"])
+    """One step of the car (:func:`mutual.dubins.step_jax`)."""
+    from ..dubins import step_jax
+    return step_jax(x, u, params["dt"], params["speed"])
 
 
 def running(x, u, params):

@@ -16,6 +16,7 @@ import functools
 import hashlib
 import inspect
 import platform
+import textwrap
 from dataclasses import dataclass
 
 import hj_reachability as hj
@@ -27,9 +28,10 @@ import pandas as pd
 from tqdm import tqdm
 
 from .. import __version__, budget
-from . import value_cache, value_function
+from ..dubins import DubinsCar, avoid_value
 from ..inputs import positive, real
-from .dubins import SPEED, DubinsCar, unsafe_reach
+from . import value_cache, value_function
+from .dubins import SPEED, unsafe_reach
 from .value_function import (FULL_GRID, METHODS, QUICK_GRID, GridSpec, ValueFunction, ValueLibrary,  # noqa: F401
                              unsafe_set_contains)
 
@@ -110,8 +112,8 @@ def solver_code_version():
     cache key, so that a change to the solver's code never serves values of the old code."""
     parts = (DubinsCar, value_function.GridSpec, value_function._hj_grid, _chunk_stepper, _initial_values, _converge)
     digest = hashlib.sha256()
-    for part in parts:
-        digest.update(inspect.getsource(inspect.unwrap(part)).encode())
+    for part in parts:   # dedented: DubinsCar is defined inside mutual.dubins._hj_face (loaded on first use)
+        digest.update(textwrap.dedent(inspect.getsource(inspect.unwrap(part))).encode())
     return digest.hexdigest()[:16]
 
 
@@ -193,20 +195,12 @@ def _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_ma
 
 
 def closed_form_values(w_max, obstacle_radius, grid_spec, speed=SPEED, tol=1e-9):
-    """The exact avoid value of eq. (4.3) (no disturbance) at every node of ``grid_spec``, float32.
-
-    The formula of :func:`~mutual.supervision.dubins.avoid_value_closed_form`, broadcast over the
-    grid's axes (x, y, theta) instead of evaluated state by state.
-    """
+    """The exact avoid value of eq. (4.3) (no disturbance) at every node of ``grid_spec``, float32:
+    :func:`mutual.dubins.avoid_value` broadcast over the grid's axes (x, y, theta)."""
     big_r = positive("speed", speed) / positive("w_max", w_max)
     radius = positive("obstacle_radius", obstacle_radius)
     xs, ys, ts = grid_spec.coordinate_vectors
-    x, y = xs[:, None, None], ys[None, :, None]
-    cos, sin = np.cos(ts)[None, None, :], np.sin(ts)[None, None, :]
-    turning = [np.abs(np.hypot(x - sign * big_r * sin, y + sign * big_r * cos) - big_r) for sign in (1, -1)]
-    approaching = x * cos + y * sin < -tol
-    values = np.where(approaching, np.maximum(*turning), np.hypot(x, y)) - radius
-    return values.astype(np.float32)
+    return avoid_value(xs[:, None, None], ys[None, :, None], ts[None, None, :], big_r, radius, tol).astype(np.float32)
 
 
 def value_library(w_maxes, obstacle_radius, grid_spec=FULL_GRID, solver=SolverSpec(), speed=SPEED, d_max=0.0,

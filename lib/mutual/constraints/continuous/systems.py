@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ... import dubins
 from ...inputs import UserFunction, call, load_function
 
 
@@ -49,9 +50,8 @@ def cartpole(x, u, cart_mass=1.0, pole_mass=0.1, pole_half_length=0.5, gravity=9
 
 
 def unicycle(x, u, speed=1.0):
-    """Chapter 4's Dubins car at constant ``speed``: x' = v cos h, y' = v sin h, h' = u."""
-    heading = x[:, 2]
-    return np.stack([speed * np.cos(heading), speed * np.sin(heading), u[:, 0]], axis=1)
+    """Chapter 4's Dubins car at constant ``speed``: x' = v cos h, y' = v sin h, h' = u (:func:`mutual.dubins.derivative`)."""
+    return dubins.derivative(x, u, speed)
 
 
 def double_integrator(x, u):

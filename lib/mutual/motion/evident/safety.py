@@ -35,7 +35,8 @@ from ..legible.problem import QuadraticCost, reaching_cost
 from ..trajopt import MultiStart, ilqr, ilqr_batch, solve_single_shooting, trajectory_cost, trajectory_cost_grad
 from ..trajopt import rollout as _rollout
 from .evidence import distance_to_point
-from .vehicles import SPEED, WHEELBASE, bicycle_step, dubins_step, single_integrator_step
+from ...dubins import SPEED, step_jax
+from .vehicles import WHEELBASE, bicycle_step, single_integrator_step
 
 FEATURES = ("goal", "effort", "hazard", "keep_out")
 
@@ -66,7 +67,7 @@ def _step(x, u, params):
     """The task's dynamics by state length: 2 ``x' = u``, 3 the Dubins car, 4 the bicycle."""
     dt = params["dt"]
     if x.shape[0] == 3:
-        return dubins_step(x, u, dt, params["speed"])
+        return step_jax(x, u, dt, params["speed"])
     if x.shape[0] == 4:
         return bicycle_step(x, u, dt, params["wheelbase"])
     return single_integrator_step(x, u, dt)

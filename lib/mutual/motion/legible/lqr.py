@@ -32,6 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..riccati import LQStage, riccati_step
+
 
 @dataclass(frozen=True)
 class LQSolution:
@@ -120,33 +122,23 @@ def riccati_backward(A, B, Q, R, q, r, QN, qN, M=None, c=None, starts=None):
         raise ValueError(f"starts must be {P} non-decreasing stage indices in [0, {N}), got {starts!r}")
     M = np.zeros((P, N, n, m)) if M is None else M
     c = np.zeros((N, n)) if c is None else c
-    AT, BT = A.transpose(0, 2, 1), B.transpose(0, 2, 1)
-    MT = M.transpose(0, 1, 3, 2)
+    F = np.concatenate([A, B], axis=2)                               # x' = A x + B u + c = F (x, u) + c
+    H = np.empty((P, N, n + m, n + m))                               # the cost 1/2 z'H z + g'z in z = (x, u)
+    H[..., :n, :n], H[..., :n, n:], H[..., n:, :n], H[..., n:, n:] = Q, M, M.transpose(0, 1, 3, 2), R
+    g = np.concatenate([np.broadcast_to(q, (P, N, n)), np.broadcast_to(r, (P, N, m))], axis=2)
     active = np.searchsorted(starts, np.arange(N), side="right")   # problems already started at stage k
     K, kff = np.zeros((P, N, m, n)), np.zeros((P, N, m))
     V, v = np.zeros((P, N + 1, n, n)), np.zeros((P, N + 1, n))
     Quu = np.tile(np.eye(m), (P, N, 1, 1))
     V[:, N] = 0.5 * (QN + QN.transpose(0, 2, 1))
     v[:, N] = qN
-    for t in range(N - 1, -1, -1):
-        a = active[t]
-        Vn, vn = V[:a, t + 1], v[:a, t + 1, :, None]
-        VA, VB = Vn @ A[t], Vn @ B[t]
-        vc = vn + Vn @ c[t, :, None]
-        Quu[:a, t] = R[:a, t] + BT[t] @ VB
-        Qux = MT[:a, t] + BT[t] @ VA
-        try:
-            inv = np.linalg.inv(Quu[:a, t])
-        except np.linalg.LinAlgError:
-            raise ValueError(f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} is singular; "
-                             + _UNBOUNDED) from None
-        Kt = K[:a, t] = -inv @ Qux
-        kt = -inv @ (r[:a, t, :, None] + BT[t] @ vc)
-        kff[:a, t] = kt[..., 0]
-        QxuT = Qux.transpose(0, 2, 1)
-        Vt = Q[:a, t] + AT[t] @ VA + QxuT @ Kt
-        V[:a, t] = 0.5 * (Vt + Vt.transpose(0, 2, 1))
-        v[:a, t] = (q[:a, t, :, None] + AT[t] @ vc + QxuT @ kt)[..., 0]
+    with np.errstate(invalid="ignore", over="ignore"):   # an unbounded problem's NaN: reported below
+        for t in range(N - 1, -1, -1):
+            a = active[t]
+            stage = LQStage(F=F[t], H=H[:a, t], g=g[:a, t], c=c[t])
+            step = riccati_step(V[:a, t + 1], v[:a, t + 1], stage, factor=False)   # tested below
+            Quu[:a, t], K[:a, t], kff[:a, t] = step.Q_uu, step.K, step.k
+            V[:a, t], v[:a, t] = step.V, step.v
     _check_convex(Quu, R, B, V, started=np.arange(N) >= starts[:, None])
     return K, kff, V, v
 
@@ -228,8 +220,9 @@ def solve_lq(A, B, Q, R, x0, N, q=None, r=None, QN=None, qN=None, M=None, c=None
         bad = np.nonzero(~(pivots > 1e-9 * scales))[0]
         if len(bad):
             t = bad.max()
-            raise ValueError(f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} has Cholesky "
-                             f"pivot {pivots[t]:.3g} (not positive definite); " + _UNBOUNDED)
+            pivot = f"Cholesky pivot {pivots[t]:.3g}" if np.isfinite(pivots[t]) else "a negative Cholesky pivot"
+            raise ValueError(f"unbounded LQ problem: the control Hessian R + B'VB at stage {t} has {pivot} "
+                             "(not positive definite); " + _UNBOUNDED)
         return LQSolution(xs=xs, us=us, K=K, k=kff, V=V, v=v, cost=cost)
 
     K, kff, V, v = riccati_backward(A, B, Q[None], R[None], q[None], r[None], QN[None], qN[None], M=M[None], c=c)

@@ -7,8 +7,9 @@ motion problems (n <= 12 states, m <= 6 controls):
 * one ``jax.lax.scan`` backward (gains) and one forward (rollout), jit-compiled;
 * matrix products written as broadcast multiply-and-sum, so XLA fuses each stage into a few
   loops instead of calling a BLAS kernel per product;
-* the Cholesky factorisation of ``Q_uu = R + B'VB`` unrolled into scalar arithmetic at trace
-  time for ``m <= UNROLLED_MAX_M`` = 4 (LAPACK's ``potrf`` has a fixed cost per call, which
+* each stage is :func:`mutual.motion.riccati.riccati_step` (the step every Riccati recursion of the
+  package takes), whose Cholesky factorisation of ``Q_uu = R + B'VB`` is unrolled into scalar
+  arithmetic at trace time for ``m <= 4`` (LAPACK's ``potrf`` has a fixed cost per call, which
   pays off from about m = 5: measured 1.6 vs 1.9 ms at m = 4 and 4.8 vs 2.9 ms at m = 6, N = 1000);
 * horizons padded up to a few lengths per octave (:func:`bucket`) with the padding stages
   masked out, so replanning on shrinking horizons reuses one compiled function.
@@ -23,9 +24,9 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.scipy.linalg import cho_solve
 
-UNROLLED_MAX_M = 4
+from ..riccati import LQStage, mm, mv, riccati_step
+
 MIN_BUCKET = 16
 FIELDS = ("A", "B", "Q", "R", "q", "r", "M", "c")
 
@@ -36,38 +37,6 @@ def bucket(N):
         return MIN_BUCKET
     step = 2 ** (int(np.floor(np.log2(N))) - 2)
     return int(-(-N // step) * step)
-
-
-def _mm(a, b):
-    return (a[:, :, None] * b[None, :, :]).sum(1)
-
-
-def _mv(a, x):
-    return (a * x[None, :]).sum(1)
-
-
-def _chol_solve(S, rhs):
-    """``(S^-1 rhs, smallest Cholesky pivot)`` for a symmetric ``S`` (m, m); the pivot is <= 0
-    (or NaN) unless ``S`` is positive definite."""
-    m = S.shape[-1]
-    if m > UNROLLED_MAX_M:
-        L = jnp.linalg.cholesky(S)                      # NaN unless positive definite
-        return cho_solve((L, True), rhs), jnp.min(jnp.diagonal(L)) ** 2
-    L, pivots = [], []
-    for i in range(m):
-        row = []
-        for j in range(i):
-            row.append((S[i, j] - sum(row[p] * L[j][p] for p in range(j))) / L[j][j])
-        pivots.append(S[i, i] - sum(x * x for x in row))
-        row.append(jnp.sqrt(pivots[-1]))
-        L.append(row)
-    Y = []
-    for i in range(m):
-        Y.append((rhs[i] - sum(L[i][p] * Y[p] for p in range(i))) / L[i][i])
-    X = [None] * m
-    for i in reversed(range(m)):
-        X[i] = (Y[i] - sum(L[p][i] * X[p] for p in range(i + 1, m))) / L[i][i]
-    return jnp.stack(X), jnp.nanmin(jnp.stack(pivots))
 
 
 @partial(jax.jit, static_argnames=("per_stage",))
@@ -83,32 +52,24 @@ def _solve(arrays, QN, qN, x0, pad, per_stage):
     def back(carry, s):
         V, v = carry
         p = stage(s)
-        A, B, c = p["A"], p["B"], p["c"]
-        VA, VB = _mm(V, A), _mm(V, B)
-        vc = v + _mv(V, c)
-        BVB = _mm(B.T, VB)
-        Quu = p["R"] + BVB
-        Quu = 0.5 * (Quu + Quu.T)
-        Qux = p["M"].T + _mm(B.T, VA)
-        qu = p["r"] + _mv(B.T, vc)
-        X, pivot = _chol_solve(Quu, jnp.concatenate([Qux, qu[:, None]], axis=1))
-        K, k = -X[:, :-1], -X[:, -1]
-        Vn = p["Q"] + _mm(A.T, VA) + _mm(Qux.T, K)
-        Vn = 0.5 * (Vn + Vn.T)
-        vn = p["q"] + _mv(A.T, vc) + _mv(Qux.T, k)
+        F = jnp.concatenate([p["A"], p["B"]], axis=1)
+        H = jnp.block([[p["Q"], p["M"]], [p["M"].T, p["R"]]])
+        step = riccati_step(V, v, LQStage(F=F, H=H, g=jnp.concatenate([p["q"], p["r"]]), c=p["c"]), jnp)
+        BVB = mm(jnp, p["B"].T, mm(jnp, V, p["B"]))
         scale = jnp.abs(p["R"]).max() + jnp.abs(BVB).max()
         active = s["t"] >= pad
-        V_out, v_out = jnp.where(active, Vn, V), jnp.where(active, vn, v)
-        return (V_out, v_out), (K, k, V_out, v_out, pivot, scale)
+        V_out, v_out = jnp.where(active, step.V, V), jnp.where(active, step.v, v)
+        root = jnp.min(jnp.diagonal(step.L))                 # the smallest pivot's root; NaN for a negative pivot
+        return (V_out, v_out), (step.K, step.k, V_out, v_out, root * root, scale)
 
     xs_back = {**varying, "t": t_all}
     _, (K, k, V, v, pivots, scales) = jax.lax.scan(back, (QN, qN), xs_back, reverse=True)
 
     def fwd(x, s):
         p = stage(s)
-        u = _mv(s["K"], x) + s["k"]
+        u = mv(jnp, s["K"], x) + s["k"]
         active = s["t"] >= pad
-        xn = jnp.where(active, _mv(p["A"], x) + _mv(p["B"], u) + p["c"], x)
+        xn = jnp.where(active, mv(jnp, p["A"], x) + mv(jnp, p["B"], u) + p["c"], x)
         u = jnp.where(active, u, 0.0)
         return xn, (x, u)
 

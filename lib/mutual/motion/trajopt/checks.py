@@ -48,11 +48,14 @@ def check_callables(dynamics, running_cost, terminal_cost):
 def params_signature(params, batch=False):
     """The tree structure and the (shape, dtype) of each leaf of ``params`` (without the batch axis)."""
     leaves, treedef = jax.tree_util.tree_flatten(params)
+    specs = []
     for leaf in leaves:
-        if not np.all(np.isfinite(_array("params", leaf))):
+        array = _array("params", leaf)
+        if not np.isfinite(array).all():
             raise ValueError("params must be finite")
-    cut = 1 if batch else 0
-    return treedef, tuple((np.shape(leaf)[cut:], np.result_type(leaf).name) for leaf in leaves)
+        dtype = leaf.dtype if isinstance(leaf, (np.ndarray, np.generic, jax.Array)) else np.result_type(leaf)
+        specs.append((array.shape[1 if batch else 0:], dtype.name))
+    return treedef, tuple(specs)
 
 
 def check_problem(dynamics, running_cost, terminal_cost, x0, us, params):
@@ -63,9 +66,9 @@ def check_problem(dynamics, running_cost, terminal_cost, x0, us, params):
         raise ValueError(f"x0 must be a state vector, got shape {x0.shape}")
     if us.ndim != 2 or us.shape[0] < 1 or us.shape[1] < 1:
         raise ValueError(f"us must have shape (N, m) with N >= 1, got {us.shape}")
-    if not np.all(np.isfinite(x0)):
+    if not np.isfinite(x0).all():
         raise ValueError("x0 must be finite")
-    if not np.all(np.isfinite(us)):
+    if not np.isfinite(us).all():
         raise ValueError("us must be finite")
     _check_outputs(dynamics, running_cost, terminal_cost, x0.shape[0], us.shape[1], *params_signature(params))
     return x0, us

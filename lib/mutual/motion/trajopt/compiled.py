@@ -14,6 +14,7 @@ import numpy as np
 
 from .iteration import finish, initial, is_near, iteration, running
 from .problem import Problem, rollout, shooting_cost
+from .settings import Tolerances
 
 SHRINK_FROM = 16  # a batch of fewer problems runs to its end (a smaller one would cost another compilation)
 
@@ -38,24 +39,25 @@ def _put(tree, index, values):
     return jax.tree_util.tree_map(lambda a, b: a.at[index].set(b), tree, values)
 
 
-def solve(problem, x0, us, params, tol, second_order, max_iter):
+def solve(problem, x0, us, params, tolerances, second_order, max_iter):
     """iLQR to convergence as one ``while_loop`` over backward passes.
 
-    ``tol`` holds ``grad_tol``, ``stall_tol``, ``step_tol``, ``reg_max``, ``divergence_ratio``,
-    ``divergence_bound`` (inf: off) and ``target`` (-inf: off). Returns what
-    :func:`.iteration.finish` returns.
+    ``tolerances``: :attr:`.settings.ILQRSettings.tolerances` (one array, read as a
+    :class:`.settings.Tolerances`). Returns what :func:`.iteration.finish` returns.
     """
+    tol = Tolerances(*tolerances)
     end = jax.lax.while_loop(lambda s: running(s, max_iter),
                              lambda s: iteration(problem, s, x0, params, tol, second_order),
                              initial(problem, x0, us, params, max_iter))
     return finish(problem, end, params)
 
 
-def advance(problem, states, x0, params, tol, second_order, max_iter, keep):
+def advance(problem, states, x0, params, tolerances, second_order, max_iter, keep):
     """Passes of a batch of solves (leading axis) until at most ``keep`` of them still run.
 
     A member that has stopped keeps its state while the others go on; the loop ends for the
     whole batch once few enough run, so the caller can gather the rest into a smaller batch."""
+    tol = Tolerances(*tolerances)
     step = jax.vmap(partial(iteration, problem), in_axes=(0, 0, 0, None, None, None))
 
     def body(states):
@@ -71,7 +73,7 @@ def advance(problem, states, x0, params, tol, second_order, max_iter, keep):
     return jax.lax.while_loop(go_on, body, states)
 
 
-def solve_batch(problem, programs, x0, us, params, tol, second_order, max_iter):
+def solve_batch(problem, programs, x0, us, params, tolerances, second_order, max_iter):
     """:func:`solve` for a batch (leading axis on ``x0``, ``us`` and every leaf of ``params``).
 
     A batch of at least ``SHRINK_FROM`` problems shrinks as its members stop: once at most a
@@ -86,7 +88,7 @@ def solve_batch(problem, programs, x0, us, params, tol, second_order, max_iter):
     while live.size:
         pick = np.concatenate([live, np.repeat(live[:1], size - live.size)])
         part = (states, x0, params) if size == len(x0) else _take((states, x0, params), pick)
-        done = advance_batch(*part, tol, second_order, max_iter, size // 4 if size >= SHRINK_FROM else 0)
+        done = advance_batch(*part, tolerances, second_order, max_iter, size // 4 if size >= SHRINK_FROM else 0)
         states = done if size == len(x0) else _put(states, pick, done)
         live = live[np.asarray(running(done, max_iter))[:live.size]]
         size = 4 ** int(np.ceil(np.log(max(live.size, 1)) / np.log(4) - 1e-9))
@@ -104,8 +106,9 @@ def kernels(dynamics, running_cost, terminal_cost):
     """The compiled :class:`Kernels` of one problem's callables.
 
     ``rollout(x0, us, params)``; ``value_and_grad(us, x0, params)`` of the single-shooting cost;
-    ``solve(x0, us, params, tol, second_order, max_iter)`` (one jit-compiled loop); ``solve_batch``
-    the same for a batch (a leading axis on ``x0``, ``us`` and ``params``); ``hessian(us, x0, params)``.
+    ``solve(x0, us, params, tolerances, second_order, max_iter)`` (one jit-compiled loop; the last two
+    static); ``solve_batch`` the same for a batch (a leading axis on ``x0``, ``us`` and ``params``);
+    ``hessian(us, x0, params)``.
     """
     problem = Problem(dynamics, running_cost, terminal_cost)
     programs = (jax.jit(jax.vmap(partial(initial, problem), in_axes=(0, 0, 0, None)), static_argnums=3),
@@ -113,6 +116,6 @@ def kernels(dynamics, running_cost, terminal_cost):
                 jax.jit(jax.vmap(partial(finish, problem))))
     return Kernels(rollout=jax.jit(partial(rollout, problem)),
                    value_and_grad=jax.jit(jax.value_and_grad(partial(shooting_cost, problem))),
-                   solve=jax.jit(partial(solve, problem), static_argnames=("second_order", "max_iter")),
+                   solve=jax.jit(partial(solve, problem), static_argnums=(4, 5)),
                    solve_batch=partial(solve_batch, problem, programs),
                    hessian=jax.jit(partial(hessian, problem)))

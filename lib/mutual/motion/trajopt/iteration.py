@@ -94,15 +94,15 @@ def stop_status(s, tol, c, pd, stationary, rounding, accepted, mu_up, trial, sca
     x_new, u_new, c_new, mag_new = trial
     step = jnp.max(jnp.abs(u_new - s["us"]))
     largest = jnp.maximum(jnp.max(jnp.abs(u_new)), jnp.max(jnp.abs(s["us"])))
-    stalled = ((s["cost"] - c_new <= tol["stall_tol"] * jnp.maximum(mag_new, EPS * c))
-               & (step <= tol["step_tol"] * largest))
-    runaway = (c_new < s["costs"][0] - tol["divergence_ratio"] * scale) | ~(
-        jnp.maximum(jnp.max(jnp.abs(x_new)), jnp.max(jnp.abs(u_new))) <= tol["divergence_bound"])
+    stalled = ((s["cost"] - c_new <= tol.stall_tol * jnp.maximum(mag_new, EPS * c))
+               & (step <= tol.step_tol * largest))
+    runaway = (c_new < s["costs"][0] - tol.divergence_ratio * scale) | ~(
+        jnp.maximum(jnp.max(jnp.abs(x_new)), jnp.max(jnp.abs(u_new))) <= tol.divergence_bound)
     status = jnp.select(
         [stationary | rounding,
-         ~accepted & (mu_up > tol["reg_max"]),
+         ~accepted & (mu_up > tol.reg_max),
          accepted & runaway,
-         accepted & (stalled | (c_new <= tol["target"]))],
+         accepted & (stalled | (c_new <= tol.target))],
         [CONVERGED, jnp.where(pd, NO_DECREASE, INDEFINITE), DIVERGED, CONVERGED], RUNNING)
     return status.astype(jnp.int32), step
 
@@ -117,7 +117,7 @@ def iteration(problem, s, x0, params, tol, second_order, any_near=None):
     decrease = -(d1 + d2)
     mag = jnp.maximum(s["mag"], EPS * model.c)  # a cost that is exactly 0 (ZERO)
     scale = jnp.where((s["passes"] == 0) & pd, jnp.maximum(s["scale"], decrease), s["scale"])
-    stationary = pd & (decrease <= tol["grad_tol"] ** 2 * mag)
+    stationary = pd & (decrease <= tol.grad_tol ** 2 * mag)
     search = pd & ~stationary
     x_new, u_new, c_new, mag_new, found, size = jax.lax.cond(
         search, partial(line_search, problem), partial(no_step, problem),

@@ -24,7 +24,7 @@ def solve_single_shooting(dynamics, running_cost, terminal_cost, x0, us0, params
     from scipy.optimize import minimize
 
     x0, us0 = check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
-    value_and_grad = kernels(dynamics, running_cost, terminal_cost)[1]
+    value_and_grad = kernels(dynamics, running_cost, terminal_cost).value_and_grad
     shape = us0.shape
     x0, params = jax.device_put((x0, params))  # once, so that the evaluations do not convert them again
 
@@ -41,7 +41,7 @@ def solve_single_shooting(dynamics, running_cost, terminal_cost, x0, us0, params
 def _optax_kernel(dynamics, running_cost, terminal_cost, memory_size):
     import optax
 
-    value_and_grad = kernels(dynamics, running_cost, terminal_cost)[1]
+    value_and_grad = kernels(dynamics, running_cost, terminal_cost).value_and_grad
 
     def solve(us0, x0, params, target, rtol, max_iter):
         def fun(us):

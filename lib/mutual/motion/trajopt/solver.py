@@ -33,6 +33,7 @@ import numpy as np
 from .checks import check_batch, check_problem, x64
 from .compiled import kernels
 from .iteration import CONVERGED, DIVERGED, INDEFINITE, NO_DECREASE, NONFINITE_START, SUMMARY
+from .settings import BATCH_DEFAULT, DEFAULT, ILQRSettings
 
 
 SADDLE_ESCAPES = 3  # restarts from a saddle along its most negative curvature before reporting it
@@ -71,39 +72,19 @@ class ILQRResult:
                 f"m={m}, relative decrease={self.decrease:.1e})")
 
 
-def _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound, target=None):
-    tol = dict(grad_tol=grad_tol, stall_tol=stall_tol, step_tol=step_tol, reg_max=reg_max,
-               divergence_ratio=divergence_ratio)
-    for name, value in tol.items():
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-        if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    if divergence_bound is None:
-        divergence_bound = np.inf
-    elif not (isinstance(divergence_bound, (int, float, np.integer, np.floating)) and divergence_bound > 0):
-        raise ValueError(f"divergence_bound must be None or a positive number, got {divergence_bound!r}")
-    if target is None:
-        target = -np.inf
-    elif isinstance(target, (bool, np.bool_)) or not (isinstance(target, (int, float, np.integer, np.floating))
-                                                      and np.isfinite(target)):
-        raise ValueError(f"target must be None or a finite number, got {target!r}")
-    return {**{k: float(v) for k, v in tol.items()}, "divergence_bound": float(divergence_bound),
-            "target": float(target)}
+def _host(arrays):
+    """The solve's outputs as NumPy arrays (``np.asarray`` each: a third of ``jax.device_get``'s cost here)."""
+    return tuple(np.asarray(a) for a in arrays)
 
 
-def _max_iter(max_iter):
-    if isinstance(max_iter, (bool, np.bool_)) or not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
-        raise ValueError(f"max_iter must be a positive integer, got {max_iter!r}")
-    return int(max_iter)
-
-
-def _order(second_order):
-    if isinstance(second_order, str) and second_order == "auto":
-        return "auto"
-    if isinstance(second_order, (bool, np.bool_)):
-        return bool(second_order)
-    raise ValueError(f"second_order must be True, False or 'auto', got {second_order!r}")
+def _settings(settings, changes, default):
+    """``settings`` (None: ``default``) with the keyword ``changes`` applied."""
+    if settings is None:
+        settings = default
+    elif not isinstance(settings, ILQRSettings):
+        raise ValueError(f"settings must be an ILQRSettings (mutual.motion.trajopt.ILQRSettings), got "
+                         f"{type(settings).__name__}")
+    return settings.replace(**changes) if changes else settings
 
 
 class _SaddleError(ILQRError):
@@ -117,23 +98,23 @@ def _saddle_error(message):
 def _escape_saddle(dynamics, running_cost, terminal_cost, x0, us, params):
     """Controls that lower the cost from the saddle ``us`` along the direction of most negative
     curvature of the exact Hessian (both signs, backtracking from a unit step), or None."""
-    rollout, value_and_grad, _, _, hessian = kernels(dynamics, running_cost, terminal_cost)
-    H = np.asarray(hessian(us, x0, params))
+    compiled = kernels(dynamics, running_cost, terminal_cost)
+    H = np.asarray(compiled.hessian(us, x0, params))
     values, vectors = np.linalg.eigh(0.5 * (H + H.T))
     if values[0] >= 0:
         return None
-    base = float(value_and_grad(us, x0, params)[0])
+    base = float(compiled.value_and_grad(us, x0, params)[0])
     direction = vectors[:, 0].reshape(us.shape)
     size = max(1.0, float(np.abs(us).max()))
     for step in size * 0.5 ** np.arange(20):
         for sign in (1.0, -1.0):
             trial = us + sign * step * direction
-            if float(value_and_grad(trial, x0, params)[0]) < base:
+            if float(compiled.value_and_grad(trial, x0, params)[0]) < base:
                 return trial
     return None
 
 
-def _outcome(xs, us, K, costs, summary, tol, max_iter):
+def _outcome(xs, us, K, costs, summary, settings):
     """An :class:`ILQRResult`, or the :class:`ILQRError` that says why there is none (not raised)."""
     end = dict(zip(SUMMARY, np.asarray(summary).tolist()))
     status, steps = int(end["status"]), int(end["steps"])
@@ -154,16 +135,16 @@ def _outcome(xs, us, K, costs, summary, tol, max_iter):
     if status in (INDEFINITE, NO_DECREASE):
         why = ("the control Hessian Q_uu stayed indefinite" if status == INDEFINITE
                else "no step along the regularised direction decreased the cost")
-        return ILQRError(f"iLQR failed: {why} up to regularisation mu = {tol['reg_max']:g} (relative to the "
+        return ILQRError(f"iLQR failed: {why} up to regularisation mu = {settings.reg_max:g} (relative to the "
                          f"control curvature; cost {cost:.6g}, predicted decrease {relative:.3g} of the cost's "
                          f"magnitude after {steps} steps); the objective is probably unbounded below or not smooth")
     if status == DIVERGED:
         return ILQRError(f"iLQR diverged: after {steps} steps the cost is {cost:.6g}, below the start's "
-                         f"{end['start_cost']:.6g} by more than divergence_ratio = {tol['divergence_ratio']:g} times "
+                         f"{end['start_cost']:.6g} by more than divergence_ratio = {settings.divergence_ratio:g} times "
                          f"the start's scale {end['scale']:.3g} (or a state or control passed divergence_bound); "
                          "the objective is unbounded below (for a legible objective (1 + alpha) J1 - J0, increase "
                          "alpha or shorten the horizon)")
-    return ILQRError(f"iLQR did not converge in max_iter = {max_iter} iterations (cost {cost:.6g}, predicted "
+    return ILQRError(f"iLQR did not converge in max_iter = {settings.max_iter} iterations (cost {cost:.6g}, predicted "
                      f"decrease {relative:.3g} of the cost's magnitude); the objective may be unbounded below "
                      "or badly scaled; raise max_iter")
 
@@ -172,7 +153,7 @@ def _outcome(xs, us, K, costs, summary, tol, max_iter):
 def rollout(dynamics, x0, us, params=None):
     """States ``x_0..x_N`` (N+1, n) reached from ``x0`` under the controls ``us`` (N, m)."""
     x0, us = check_problem(dynamics, _no_cost, _no_terminal_cost, x0, us, params)
-    return np.asarray(kernels(dynamics, _no_cost, _no_terminal_cost)[0](x0, us, params))
+    return np.asarray(kernels(dynamics, _no_cost, _no_terminal_cost).rollout(x0, us, params))
 
 
 def _no_cost(x, u, params):
@@ -193,27 +174,26 @@ def trajectory_cost(dynamics, running_cost, terminal_cost, x0, us, params=None):
 def trajectory_cost_grad(dynamics, running_cost, terminal_cost, x0, us, params=None):
     """``(H_J(u), dH_J/du)``: the single-shooting objective and its autodiff gradient (N, m)."""
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
-    value, grad = kernels(dynamics, running_cost, terminal_cost)[1](us, x0, params)
+    value, grad = kernels(dynamics, running_cost, terminal_cost).value_and_grad(us, x0, params)
     return float(value), np.asarray(grad)
 
 
 @x64
-def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=200, grad_tol=1e-6,
-         stall_tol=1e-12, reg_max=1e10, divergence_bound=None, second_order="auto", *, step_tol=1e-8,
-         divergence_ratio=1e8, target=None):
+def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, settings=None, **changes):
     """Minimise the total cost from ``x0`` by iLQR, starting from the controls ``us0`` (N, m);
     return an :class:`ILQRResult`.
 
-    ``params`` (any pytree) is passed to the three callables. Converged (all tests scale-free,
-    :mod:`.iteration`) when the model's predicted decrease ``1/2 g'H^-1 g`` is at most
-    ``grad_tol**2`` times the objective's magnitude ``M`` (sum of absolute stage costs), or when an
-    accepted step lowered the cost by at most ``stall_tol M`` and moved no control by more than
-    ``step_tol`` times the largest control, or when only rounding is left; the point must then be
-    a local minimum (the exact Hessian in the controls positive definite), not a saddle. Raises
-    :class:`ILQRError` when it is not, when the regularisation needed exceeds ``reg_max`` (relative
-    to the control curvature), when the cost falls below the start's by more than
-    ``divergence_ratio`` times the start's scale (or, if ``divergence_bound`` is given, a state or
-    control exceeds it), or after ``max_iter`` backward passes.
+    ``params`` (any pytree) is passed to the three callables. ``settings``: an :class:`ILQRSettings`
+    (default: its defaults); keywords change single fields of it (``ilqr(..., max_iter=500)``).
+    Converged (all tests scale-free, :mod:`.iteration`) when the model's predicted decrease
+    ``1/2 g'H^-1 g`` is at most ``grad_tol**2`` times the objective's magnitude ``M`` (sum of
+    absolute stage costs), or when an accepted step lowered the cost by at most ``stall_tol M`` and
+    moved no control by more than ``step_tol`` times the largest control, or when only rounding is
+    left; the point must then be a local minimum (the exact Hessian in the controls positive
+    definite), not a saddle. Raises :class:`ILQRError` when it is not, when the regularisation
+    needed exceeds ``reg_max`` (relative to the control curvature), when the cost falls below the
+    start's by more than ``divergence_ratio`` times the start's scale (or, if ``divergence_bound``
+    is given, a state or control exceeds it), or after ``max_iter`` backward passes.
     A stationary point that is not a minimum is left along the exact Hessian's most negative
     curvature and the solve goes on, at most ``SADDLE_ESCAPES`` times, before it is reported.
     ``second_order``: False for Gauss-Newton iLQR, True for full DDP, ``"auto"`` (default)
@@ -221,13 +201,12 @@ def ilqr(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=2
     ``target``: also stop at the first accepted step whose cost is at most ``target`` (NLopt's
     ``stopval``; e.g. a known optimum plus a tolerance, to time solvers to equal cost).
     """
-    max_iter = _max_iter(max_iter)
-    tol = _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound, target)
+    settings = _settings(settings, changes, DEFAULT)
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us0, params)
-    solve = kernels(dynamics, running_cost, terminal_cost)[2]
+    solve = kernels(dynamics, running_cost, terminal_cost).solve
     for _ in range(SADDLE_ESCAPES + 1):
-        out = jax.device_get(solve(x0, us, params, tol, second_order=_order(second_order), max_iter=max_iter))
-        outcome = _outcome(*out, tol, max_iter)
+        out = _host(solve(x0, us, params, settings.tolerances, settings.second_order, settings.max_iter))
+        outcome = _outcome(*out, settings)
         if not isinstance(outcome, _SaddleError):
             break
         # a saddle (the regularised model can hide negative curvature): step off along it and go on
@@ -272,9 +251,7 @@ class ILQRBatch:
 
 
 @x64
-def ilqr_batch(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_iter=200, grad_tol=1e-6,
-               stall_tol=1e-12, reg_max=1e10, divergence_bound=None, second_order=False, *, step_tol=1e-8,
-               divergence_ratio=1e8, target=None):
+def ilqr_batch(dynamics, running_cost, terminal_cost, x0, us0, params=None, settings=None, **changes):
     """Solve ``B`` problems at once (:func:`ilqr`'s compiled passes under ``jax.vmap``, same tests).
 
     ``x0`` (B, n) start states, ``us0`` (B, N, m) initial controls and ``params`` a pytree whose
@@ -284,16 +261,17 @@ def ilqr_batch(dynamics, running_cost, terminal_cost, x0, us0, params=None, max_
     slow members run on in a small batch instead of keeping the whole batch busy. Returns an
     :class:`ILQRBatch` (failures are reported per problem, not raised).
 
-    The default is Gauss-Newton (``second_order=False``); with ``"auto"`` a batched pass computes
+    ``settings`` and keywords as for :func:`ilqr`, but the default is Gauss-Newton
+    (``second_order=False``, :data:`.settings.BATCH_DEFAULT`); with ``"auto"`` a batched pass computes
     the dynamics' Hessians whenever any member is near its minimum. ``bench/bench_ilqr.py``
     measures batches against the same problems solved one at a time.
     """
-    max_iter = _max_iter(max_iter)
-    tol = _tolerances(grad_tol, stall_tol, step_tol, reg_max, divergence_ratio, divergence_bound, target)
+    settings = _settings(settings, changes, BATCH_DEFAULT)
     x0, us = check_batch(dynamics, running_cost, terminal_cost, x0, us0, params)
-    solve = kernels(dynamics, running_cost, terminal_cost)[3]
-    xs, us, K, costs, summary = jax.device_get(solve(x0, us, params, tol, _order(second_order), max_iter))
-    outcomes = [_outcome(xs[i], us[i], K[i], costs[i], summary[i], tol, max_iter) for i in range(len(x0))]
+    solve = kernels(dynamics, running_cost, terminal_cost).solve_batch
+    xs, us, K, costs, summary = jax.device_get(solve(x0, us, params, settings.tolerances, settings.second_order,
+                                                     settings.max_iter))
+    outcomes = [_outcome(xs[i], us[i], K[i], costs[i], summary[i], settings) for i in range(len(x0))]
     return ILQRBatch(results=tuple(None if isinstance(o, ILQRError) else o for o in outcomes),
                      errors=tuple(str(o) if isinstance(o, ILQRError) else None for o in outcomes))
 
@@ -304,9 +282,9 @@ def iteration_flops(dynamics, running_cost, terminal_cost, x0, us, params=None, 
     (``max_iter=1``) on this problem, from XLA's static cost analysis of the compiled program: a
     deterministic operation count for comparing objectives (Corollary 6.4.2.1), not a timing."""
     x0, us = check_problem(dynamics, running_cost, terminal_cost, x0, us, params)
-    tol = _tolerances(1e-6, 1e-12, 1e-8, 1e10, 1e8, None)
-    solve = kernels(dynamics, running_cost, terminal_cost)[2]
-    analysis = solve.lower(x0, us, params, tol, second_order=_order(second_order), max_iter=1).compile()
+    settings = DEFAULT.replace(second_order=second_order, max_iter=1)
+    solve = kernels(dynamics, running_cost, terminal_cost).solve
+    analysis = solve.lower(x0, us, params, settings.tolerances, settings.second_order, settings.max_iter).compile()
     costs = analysis.cost_analysis()
     costs = costs[0] if isinstance(costs, (list, tuple)) else costs
     return float(costs["flops"])
