@@ -162,7 +162,9 @@ def test_library_entry_points_refuse_before_they_allocate():
 
 
 @pytest.mark.parametrize("estimate, seconds", [
-    (budget.anova(1000, 3), 499_500 * budget.ANOVA_PAIR_SECONDS),
+    (budget.anova(1000, 3), 499_500 * budget.ANOVA_PAIR_SECONDS + 3000 * budget.ANOVA_ROW_SECONDS),
+    (budget.anova(2, 200_000, 400_000), 1 * budget.ANOVA_PAIR_SECONDS + 400_000 * budget.ANOVA_ROW_SECONDS),
+    (budget.csv_table("d.csv", 10 ** 6, 200_000), 10 ** 6 * budget.CSV_BYTE_SECONDS + 200_000 * budget.CSV_COLUMN_SECONDS),
     (budget.legible(10_000, 3001), 10_000 * 3001 * budget.LQ_STEP_SECONDS),
     (budget.discretization((41, 41), 5, 16), 41 * 41 * 5 * 16 * 4 * budget.RK4_SECONDS),
 ])

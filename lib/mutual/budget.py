@@ -44,13 +44,19 @@ ILQR_STEP_SECONDS = 5e-4         # one step of one hypothesis of the Dubins car'
 HJ_NODE_SECONDS = 2.3e-5         # one grid node of one value function (hj-reachability, to convergence)
 CLOSED_FORM_NODE_SECONDS = 2e-7  # one grid node of one value function in closed form
 PARTICIPANT_SECONDS = 0.32       # one simulated participant of the power sweep (full grid, 60-s trials)
+SAMPLE_SIZE_SECONDS = 5e-4       # one sample size of G*Power's table: its noncentral F power (scipy)
 GRID_BACKUP_SECONDS = 4e-8       # one (round, candidate, step, state, action) of gridworld inference
+
+CSV_BYTE_SECONDS = 3e-7          # one byte of a CSV file: split into lines, checked, parsed into text cells
+CSV_COLUMN_SECONDS = 1e-4        # one column of a CSV table made into a pandas column (any number of rows)
+ANOVA_ROW_SECONDS = 1e-5         # one row of a study table: its names checked, its value parsed, into the cells
 
 # bytes per unit held at the peak
 SPARSE_ENTRY_BYTES = 64          # one entry of S while it is assembled (row, column, weight; CSR copies)
 CONTINUOUS_PAIR_BYTES = 1536     # one (cell, control) pair during continuous inference (S, masks, backups)
 LQ_STEP_BYTES = 400              # one step of one hypothesis of the legible LQ solve (gains, motions, factors)
 ROW_BYTES = 200                  # one recorded state kept as a Python row (array view and list slot)
+CSV_BYTE_BYTES = 12              # one byte of a CSV file: its bytes, its text, its lines and their cells as text
 
 _LIMITS = ContextVar("mutual_budget_limits", default=(None, False, None))
 
@@ -187,12 +193,23 @@ def array(shape, itemsize=8, what="an array", knob="ask for less"):
     return Estimate(f"{what} ({_x(shape)})", _product(shape) * itemsize, 0.0, knob)
 
 
-def anova(levels, subjects):
-    """:func:`mutual.study.rm_anova` and every pair of levels (Tukey and Holm), ``levels`` x ``subjects`` cells."""
+def anova(levels, subjects, rows=None):
+    """:func:`mutual.study.rm_anova` and every pair of levels (Tukey and Holm), ``levels`` x ``subjects`` cells
+    from ``rows`` rows of long data (default: one per cell)."""
     pairs = levels * (levels - 1) / 2
+    rows = float(levels) * subjects if rows is None else float(rows)
     return Estimate(f"the repeated-measures ANOVA of {int(levels):,} levels x {int(subjects):,} subjects "
-                    f"({int(pairs):,} pairs of levels)", 8.0 * levels * subjects * 4 + 600.0 * pairs,
-                    ANOVA_PAIR_SECONDS * pairs, "analyse fewer levels (--levels, or select rows with --where)")
+                    f"({int(pairs):,} pairs of levels, {int(rows):,} rows)",
+                    8.0 * levels * subjects * 4 + 600.0 * pairs + ROW_BYTES * rows,
+                    ANOVA_PAIR_SECONDS * pairs + ANOVA_ROW_SECONDS * rows,
+                    "analyse fewer levels or subjects (--levels, or select rows with --where)")
+
+
+def csv_table(name, size, columns):
+    """Reading a CSV file of ``size`` bytes into a table of ``columns`` columns (:func:`mutual.inputs.read_csv`)."""
+    return Estimate(f"reading {name} ({memory(size)}, {int(columns):,} columns)", CSV_BYTE_BYTES * float(size),
+                    CSV_BYTE_SECONDS * size + CSV_COLUMN_SECONDS * columns,
+                    "read a smaller file (split it, or keep only the columns and rows needed)")
 
 
 def discretization(cells, controls, samples, scheme="sample", substeps=4, ndim=None):
@@ -285,6 +302,12 @@ def value_library(members, shape, computed=None, method="hj"):
     return Estimate(f"{int(members):,} value functions on {_x(shape)} nodes ({int(computed):,} to compute)",
                     4.0 * nodes * (members + 12), per_node * nodes * computed,
                     "use fewer library members (--w-max) or a smaller grid (--grid quick)")
+
+
+def sample_sizes(count, what="--n"):
+    """G*Power's analytic power at ``count`` sample sizes (``what``: as the user asked for them), a row each."""
+    return Estimate(f"{int(count):,} sample sizes ({what})", 200.0 * count, SAMPLE_SIZE_SECONDS * count,
+                    "list fewer sample sizes (--n a:b:step with a larger step)")
 
 
 def power_simulation(cohorts, participants, workers=1):

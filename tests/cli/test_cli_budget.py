@@ -71,6 +71,10 @@ CASES = [
     ({}, ["supervisor", "fit", str(EXAMPLES / "interventions.csv"), "--w-max", W_MAX],
      ["551 value functions on 101 x 101 x 64 nodes", "--w-max"]),
     ({}, ["study", "power", "--cohorts", "5000", "--n", "40"], ["5,000 simulated cohorts of 40", "--cohorts"]),
+    ({}, ["supervisor", "fit", str(EXAMPLES / "interventions.csv"), "--w-max",
+          ",".join(f"{0.01 * k:.2f}" for k in range(41, 241))],
+     ["200 value functions on 101 x 101 x 64 nodes", "minutes", "--w-max", "--grid quick"]),
+    ({}, ["study", "power", "--f", "0.25", "--n", "3:100000000"], ["99,999,998 sample sizes", "hours", "--n a:b:step"]),
 ]
 
 
@@ -124,3 +128,47 @@ def test_running_out_of_memory_is_one_line_never_a_traceback(tmp_path, monkeypat
     assert main(ANOVA + ["--out", "out"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "ran out of memory" in err[0] and "7.45 GiB" in err[0] and "Traceback" not in err[0]
+
+
+def _study_csv(subjects, levels, value, extra_columns=0):
+    extra = "".join(f",x{k}" for k in range(extra_columns))
+    zeros = ",0" * extra_columns
+    rows = "".join(f"s{i},L{j:02d},{value(i, j)}{zeros}\n" for i in range(subjects) for j in range(levels))
+    return f"subject,level,value{extra}\n" + rows
+
+
+# (subjects, levels, value(i, j), extra columns, phrases of the summary, files written)
+STUDIES = [
+    (3, 50, lambda i, j: (i * 13 + j * 7) % 11 + i, 0,
+     ["no paired t-test for 568 of 1,225 pairs", "Holm over the other 657", "Tukey's q is defined for every pair",
+      "'L00' and 'L02': the paired differences are the same for every subject (-3)", "no figure: 50 levels"],
+     ["anova_value.csv", "cells_value.csv", "pairwise_value.csv"]),
+    (20_000, 2, lambda i, j: (i * 7919 + j * 104729) % 1000, 0, ["20000 subjects"],
+     ["anova_value.csv", "cells_value.csv", "means_value.png", "pairwise_value.csv"]),
+    (6, 3, lambda i, j: (i * 7 + j * 3) % 5 + 2 * j + 1, 100_000, ["6 subjects"],
+     ["anova_value.csv", "cells_value.csv", "means_value.png", "pairwise_value.csv"]),
+]
+
+
+@pytest.mark.parametrize("subjects, levels, value, extra, phrases, written", STUDIES)
+def test_large_valid_studies_are_analysed_in_seconds(tmp_path, monkeypatch, capsys, subjects, levels, value, extra,
+                                                     phrases, written):
+    """Many subjects (drawn without their lines), many columns (never made into a table), constant paired
+    differences (that pair untested, said so): the tables are written."""
+    monkeypatch.chdir(tmp_path)
+    Path("data.csv").write_text(_study_csv(subjects, levels, value, extra))
+    assert main(ANOVA + ["--out", "out", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    for phrase in phrases:
+        assert phrase in out, (phrase, out[-600:])
+    assert sorted(p.name for p in Path("out").iterdir()) == written
+
+
+def test_the_estimate_of_an_anova_counts_its_rows(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    Path("data.csv").write_text(_study_csv(2_000, 2, lambda i, j: i + j * j))
+    monkeypatch.setenv("MUTUAL_MAX_MINUTES", "5e-4")
+    assert main(ANOVA + ["--out", "out", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    for phrase in ("2 levels x 2,000 subjects", "4,000 rows", "the limit is 0.0005 minutes", "--allow-large"):
+        assert phrase in err, (phrase, err)

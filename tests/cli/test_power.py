@@ -75,9 +75,10 @@ def test_bad_sample_size_arguments(tokens):
 
 
 def test_a_huge_range_of_sizes_is_refused_before_it_is_listed():
+    from mutual import budget
     from mutual.cli.power import parse_sizes
     tracemalloc.start()
-    with pytest.raises(ValueError, match=r"--n 3:100000000: 99,999,998 sample sizes .* GB"):
+    with budget.limits(minutes=30), pytest.raises(ValueError, match=r"99,999,998 sample sizes \(--n 3:100000000\): about .* GiB .*--n a:b:step"):
         parse_sizes(["3:100000000"])
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
@@ -85,9 +86,15 @@ def test_a_huge_range_of_sizes_is_refused_before_it_is_listed():
 
 
 CLI_REFUSED = [  # (argv after `mutual study power`, phrases); exit status 2 with one line naming the option
-    (["--n", "3:100000000"], ["--n", "GB"]),
-    (["--n", "1001", "--quick", "--inline"], ["--n", "1,001", "CPU time"]),
-    (["--cohorts", "1000000"], ["--cohorts", "days", "GB"]),
+    (["--n", "3:100000000"], ["60 simulated cohorts of 100,000,000 participants", "GiB", "years", "--allow-large"]),
+    (["--f", "0.25", "--n", "1:100000000"], ["100,000,000 sample sizes (--n 1:100000000)", "hours", "--allow-large"]),
+    (["--f", "0.25", "--n", "3:10000000"], ["9,999,998 sample sizes", "GiB", "hours", "--allow-large"]),
+    (["--n", "1001", "--quick", "--inline"], ["60 simulated cohorts of 1,001 participants", "hours", "--n", "--allow-large"]),
+    (["--quick", "--n", "100000", "--cohorts", "1", "--inline"],
+     ["1 simulated cohorts of 100,000 participants", "8.89 hours", "the limit is 30 minutes", "--allow-large"]),
+    (["--quick", "--n", "6", "--cohorts", "1000000000", "--inline"],
+     ["1,000,000,000 simulated cohorts of 6 participants", "GiB of memory", "61 years", "--cohorts", "--allow-large"]),
+    (["--cohorts", "1000000"], ["--cohorts", "days", "GiB", "--allow-large"]),
     (["--seed", "-1"], ["--seed", ">= 0"]),
     (["--seed", "nan"], ["--seed", "not a whole number"]),
     (["--seed", "1.5"], ["--seed", "not a whole number"]),
@@ -119,6 +126,18 @@ def test_power_options_are_refused_by_name(argv, phrases, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert status == 2 and "Traceback" not in err and all(p in err for p in phrases), err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("f, n", [(0.25, 1_000_000), (1e-4, 10 ** 8), (0.01, 123_457)])
+def test_the_analytic_power_at_any_n_is_computed_not_refused(tmp_path, capsys, f, n):
+    """G*Power's power at N costs the same at any N: as scipy's noncentral F (lambda = f^2 N m / (1 - rho))."""
+    from scipy import stats
+    out = tmp_path / "o"
+    assert main(["study", "power", "--f", str(f), "--n", str(n), "--out", str(out), "--no-progress"]) == 0
+    row = pd.read_csv(out / "power_gpower.csv").iloc[0]
+    lam, df1, df2 = f * f * n * 3 / 0.5, 2, 2 * (n - 1)
+    assert row["n"] == n and row["lambda"] == pytest.approx(lam, rel=1e-12)
+    assert row["power"] == pytest.approx(stats.ncf.sf(stats.f.isf(0.05, df1, df2), df1, df2, lam), rel=1e-9, abs=1e-12)
 
 
 def test_zero_effect_prints_not_reached(tmp_path, capsys):

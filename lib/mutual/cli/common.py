@@ -105,14 +105,15 @@ def about(path):
         raise InputError(message if str(path) in message else f"{path}: {message}") from None
 
 
-def read_csv(path, columns=None):
+def read_csv(path, columns=None, keep=None):
     """The CSV table at ``path`` with every cell as text as written, each row with its line in the file
     (:func:`mutual.inputs.read_csv`: ``01``, ``1``, ``NA`` and ``None`` are distinct names; only empty cells
     are missing; a repeated column name, another delimiter or a row with more fields than the header is
-    refused), ``columns`` required, with the errors of :func:`about` (file named, one line)."""
+    refused), ``columns`` required, only ``keep`` kept (all without it), with the errors of :func:`about`
+    (file named, one line)."""
     from ..inputs import read_csv as read_table
     with about(path):
-        return read_table(path, columns)
+        return read_table(path, columns, keep)
 
 
 def numeric_column(frame, column, path):

@@ -26,10 +26,8 @@ from . import common
 PROG = "mutual study power"
 #: the keys of mutual.study.cohort_power.MIXES (spelled out: building the parser imports no numpy; a test checks)
 MIX_NAMES = ("thesis", "mostly-standard", "mostly-gradual")
-#: what one request may ask for: sample sizes listed, the largest N (analytic, simulated), cohorts
-MAX_SIZES, MAX_N_ANALYTIC, MAX_N_SIMULATED, MAX_COHORTS = 10_000, 100_000, 1_000, 100_000
-#: measured (README, "Planning a replication"): one simulated participant on the full grid with 60-s trials
-SECONDS_PER_PARTICIPANT = budget.PARTICIPANT_SECONDS
+#: the largest N the G*Power tables search for a target power, and the --from-f design they accept
+MAX_SIZES, MAX_N_ANALYTIC = 10_000, 100_000
 
 DESCRIPTION = """\
 Power and sample size of a one-way repeated-measures study, analytic (G*Power's "ANOVA: repeated
@@ -67,11 +65,13 @@ def _range_size(a, b, step):
     return (b - a) // step + 1 if a <= b else 0
 
 
-def parse_sizes(tokens, most=MAX_N_ANALYTIC, why="an analytic N"):
+def parse_sizes(tokens, cohorts=None, workers=1):
     """Sample sizes from tokens ``"6:40:2"`` (inclusive range, step optional), ``"11"`` or ``"6,8,11"``.
 
-    The request is sized before anything is listed: more than ``MAX_SIZES`` sizes, or an N above
-    ``most``, is refused with what it would cost."""
+    The request is sized before anything is listed: the analytic power at each size
+    (:func:`mutual.budget.sample_sizes`: an analytic N costs the same at any size), or ``cohorts`` simulated
+    cohorts of the largest N on ``workers`` processes (:func:`mutual.budget.power_simulation`). A request
+    beyond the memory or the time limit is refused with the estimate and ``--allow-large``."""
     ranges = []
     for token in tokens:
         for part in str(token).split(","):
@@ -91,35 +91,12 @@ def parse_sizes(tokens, most=MAX_N_ANALYTIC, why="an analytic N"):
         raise ValueError("--n: give at least one sample size")
     count = sum(_range_size(a, b, step) for _, a, b, step in ranges)
     top = max(b - (b - a) % step for _, a, b, step in ranges)
-    if count > MAX_SIZES:
-        raise ValueError(f"--n {' '.join(map(str, tokens))}: {count:,} sample sizes (at most {MAX_SIZES:,}); listing "
-                         f"them would take about {_bytes(count * 64)} before any work")
+    budget.check(budget.sample_sizes(count, f"--n {' '.join(map(str, tokens))}") if cohorts is None else
+                 budget.power_simulation(cohorts, top, workers))
     low = min(a for _, a, _, _ in ranges)
     if low < 3:
         raise ValueError(f"--n: sample sizes must be whole numbers >= 3, got {low}")
-    if top > most:
-        raise ValueError(f"--n: N = {top:,} is more than {most:,} for {why}" + _cost(top))
     return sorted({n for _, a, b, step in ranges for n in range(a, b + 1, step)})
-
-
-def _bytes(n):
-    for unit in ("bytes", "kB", "MB", "GB", "TB", "PB"):
-        if n < 1000 or unit == "PB":
-            return f"{n:.3g} {unit}"
-        n /= 1000
-
-
-def _duration(seconds):
-    for unit, size in (("years", 3.15e7), ("days", 86400), ("hours", 3600), ("minutes", 60)):
-        if seconds >= size:
-            return f"{seconds / size:.3g} {unit}"
-    return f"{seconds:.3g} s"
-
-
-def _cost(n, cohorts=1):
-    return (f" (simulating {cohorts:,} cohort{'s' if cohorts != 1 else ''} of {n:,} analysed participants would take "
-            f"about {_duration(cohorts * n * SECONDS_PER_PARTICIPANT)} of CPU time at {SECONDS_PER_PARTICIPANT} s per "
-            f"participant and about {_bytes(cohorts * n * 2 * 400)} for their tables)")
 
 
 def _whole(least, option):
@@ -259,12 +236,9 @@ def analytic(args):
 
 
 def simulate(args):
-    sizes = parse_sizes(args.n or ["6:40:2", "11"], MAX_N_SIMULATED, "a simulated cohort")
-    if args.cohorts > MAX_COHORTS:
-        raise ValueError(f"--cohorts {args.cohorts:,}: more than {MAX_COHORTS:,}" + _cost(max(sizes), args.cohorts))
     import os
     workers = 1 if args.inline else (args.workers or os.cpu_count() or 1)
-    budget.check(budget.power_simulation(args.cohorts, max(sizes), workers))
+    sizes = parse_sizes(args.n or ["6:40:2", "11"], args.cohorts, workers)
     from ..study import (CohortSetting, CohortTask, TaskCache, code_version, implied_effect, power_table,
                          recommendations, run_tasks, simulate_cohort, study_value_functions)
 
@@ -289,6 +263,8 @@ def run_power(args):
         else:
             table = analytic(args)
             sim = None if args.analytic_only else simulate(args)
+    except budget.TooLarge:
+        raise
     except ValueError as err:
         raise common.InputError(" ".join(str(err).split())) from None
     with common.output_set(args) as files:

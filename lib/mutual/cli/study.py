@@ -126,8 +126,13 @@ def analyse(data, dv, within, subject, aggregate=None, levels=None):
     """The ANOVA and the pairwise table of ``data`` as one results dict (the ``--json`` object)."""
     from ..study import pairwise_comparisons, rm_anova
     anova = rm_anova(data, dv=dv, within=within, subject=subject, aggregate=aggregate, levels=levels)
-    pairwise = pairwise_comparisons(anova)
-    return anova, pairwise, {
+    pairwise = pairwise_comparisons(anova, undefined="leave")    # a pair without a t: noted, the rest tested
+    undefined = [f"{_shown(a)} and {_shown(b)}: {why}" for (a, b), why in pairwise.attrs["undefined"].items()]
+    notes = {} if not undefined else {"note_pairs": (
+        f"no paired t-test for {len(undefined):,} of {len(pairwise):,} pairs (t, p_t and p_holm left empty; Holm "
+        f"over the other {len(pairwise) - len(undefined):,}; Tukey's q is defined for every pair), "
+        + ("e.g. " if len(undefined) > 1 else "") + undefined[0])}
+    return anova, pairwise, {**notes,
         "dv": dv, "within": within, "subject": subject, "aggregate": aggregate,
         "n_subjects": anova.n_subjects, "levels": [str(level) for level in anova.levels],
         "means": {str(k): float(v) for k, v in anova.means.items()},
@@ -151,7 +156,8 @@ TABLE_COLUMNS = ("dv", "within", "subject", "n_subjects", "ss_effect", "ss_error
 
 def run_anova(args):
     path = common.existing_file(args.data)
-    frame = common.read_csv(path)
+    wanted = {args.dv, args.within, args.subject, "measure", "value"} | {c for c, _ in _filters(args.where)}
+    frame = common.read_csv(path, keep=wanted)           # the other columns are never made into a table
     data = _select(frame, args, path)
     levels = None
     if args.levels:
@@ -163,7 +169,7 @@ def run_anova(args):
                                     f"(column {args.within!r} holds {[_shown(v) for v in present[:12]]})")
         data = data[data[args.within].isin(levels)]
     k, n = data[args.within].nunique(), data[args.subject].nunique()
-    budget.check(budget.anova(k, n))          # before any pair is tested: 1000 levels are 499,500 pairs
+    budget.check(budget.anova(k, n, len(data)))   # before any pair is tested: 1000 levels are 499,500 pairs
     with common.about(path):
         try:
             anova, pairwise, results = analyse(data, args.dv, args.within, args.subject, args.aggregate, levels)
@@ -207,7 +213,10 @@ def _figure(anova, pairwise, args):
                   + ("\nmean per subject and level" if args.aggregate else ""))
     # the title in lines no wider than the axes (a long one was cut at the figure's right edge)
     pairs = "brackets: Tukey HSD p" if brackets is not None else f"{len(pairwise)} pairs: Tukey HSD p in the pairwise table"
-    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects})\ngrey: subjects; {pairs}", fontsize=8)
+    from ..study import MAX_SUBJECT_LINES
+    grey = "grey: subjects" if anova.n_subjects <= MAX_SUBJECT_LINES else \
+        f"subjects not drawn (more than {MAX_SUBJECT_LINES})"
+    ax.set_title(f"means with standard-error bars (n = {anova.n_subjects})\n{grey}; {pairs}", fontsize=8)
     return fig
 
 
@@ -253,12 +262,14 @@ def _summary(r, args):
     lines += ["", "  pairwise: Tukey HSD (repeated-measures error term) and paired t-tests (Holm-corrected)",
               f"  {'A':<{width}}{'B':<{width}}{'diff':>10}{'q':>8}{'p Tukey':>10}{'t':>8}{'p Holm':>10}"]
     for row in r["pairwise"][:MAX_PRINTED_PAIRS]:
+        t, p_holm = (f"{row['t']:>8.3g}", f"{row['p_holm']:>10.4g}") if math.isfinite(row["t"]) else (f"{'-':>8}", f"{'-':>10}")
         lines.append(f"  {names[row['A']]:<{width}}{names[row['B']]:<{width}}{row['diff']:>10.4g}{row['q']:>8.3g}"
-                     f"{row['p_tukey']:>10.4g}{row['t']:>8.3g}{row['p_holm']:>10.4g}")
+                     f"{row['p_tukey']:>10.4g}{t}{p_holm}")
     if len(r["pairwise"]) > MAX_PRINTED_PAIRS:
         lines.append(f"  ... the first {MAX_PRINTED_PAIRS} of {len(r['pairwise']):,} pairs; every pair is in "
                      f"{r['outputs']['pairwise']}")
-    if "note_figure" in r:
-        lines += ["", f"  ({r['note_figure']})"]
+    for note in ("note_pairs", "note_figure"):
+        if note in r:
+            lines += ["", f"  ({r[note]})"]
     lines += ["", "wrote " + ", ".join(r["outputs"].values())]
     return "\n".join(lines)

@@ -12,11 +12,16 @@ from .values import number_text
 __all__ = ["name_column", "number_column", "require_columns"]
 
 
+MAX_LISTED = 20          # columns named in a message: a file of 200 000 columns is not listed whole
+
+
 def require_columns(frame, columns):
     """Refuse a table without one of ``columns``, naming the first missing one and the columns it has."""
     missing = [c for c in columns if c not in frame.columns]
     if missing:
-        raise ValueError(f"{place(frame)}: missing column {missing[0]!r} (it has columns {list(frame.columns)}; "
+        header = list(frame.attrs.get("header", frame.columns))      # the file's columns, read or not
+        has = str(header) if len(header) <= MAX_LISTED else f"{header[:MAX_LISTED]} and {len(header) - MAX_LISTED:,} more"
+        raise ValueError(f"{place(frame)}: missing column {missing[0]!r} (it has columns {has}; "
                          f"expected {', '.join(map(str, columns))})")
 
 

@@ -63,6 +63,13 @@ class Lines:
         return self
 
 
+class Header(tuple):
+    """The file's column names, kept in ``frame.attrs["header"]`` and never copied (as :class:`Lines`)."""
+
+    def __deepcopy__(self, memo):
+        return self
+
+
 def line_of(frame, label, column=None):
     """The file's line that holds row ``label`` (its ``column``'s cell, in a row whose quoted fields
     span several lines) of a table read by :func:`read_csv`; None for a table made in memory."""
@@ -140,19 +147,42 @@ def _check_widths(path, n, wrong, rows):
                      "needs one field per column (quote a field that holds a comma)")
 
 
-def read_csv(path, columns=None):
+def read_csv(path, columns=None, keep=None):
     """The table in the CSV file ``path``: a DataFrame of text exactly as written, NaN where a cell is
-    empty, the header's names without surrounding spaces. ``columns``: names that must be present.
+    empty, the header's names without surrounding spaces. ``columns``: names that must be present;
+    ``keep``: the only columns wanted (those of them the file has are kept, the others are checked for
+    their number of fields but never made into columns: a file of 200 000 columns reads in seconds).
 
-    ``frame.attrs`` holds ``source`` (the path) and ``lines`` (:class:`Lines`: each row's line in the file) for
-    :func:`place` and :func:`line_of`. A ValueError names the file (and the line) for an empty file,
-    a header without rows, a repeated column name, another delimiter, a row with the wrong number of
-    fields, a missing column, a malformed CSV or bytes that are not UTF-8.
+    The file's size and its header's width are estimated before it is read (:func:`mutual.budget.csv_table`):
+    a file beyond the memory available or the time limit is refused with the estimate. ``frame.attrs`` holds
+    ``source`` (the path), ``lines`` (:class:`Lines`: each row's line in the file) for :func:`place` and
+    :func:`line_of`, and ``header`` (every column of the file, kept or not). A ValueError names the file (and the
+    line) for an empty file, a header without rows, a repeated column name, another delimiter, a row with the
+    wrong number of fields, a missing column, a malformed CSV or bytes that are not UTF-8.
     """
     path = Path(path)
+    _check_size(path, keep)
     text = _text(path)
-    plain = _plain(path, text, columns) if '"' not in text else None
-    return plain if plain is not None else _quoted(path, text, columns)
+    plain = _plain(path, text, columns, keep) if '"' not in text else None
+    return plain if plain is not None else _quoted(path, text, columns, keep)
+
+
+def _check_size(path, keep):
+    """Refuse, before reading it, a file whose table would not fit the memory or the time limit."""
+    from .. import budget
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as head:
+            width = head.readline(1 << 24).count(b",") + 1       # the header's fields (the first 16 MiB of it)
+    except OSError:
+        return                                                   # _text names the file and the reason
+    columns = width if keep is None else min(width, len(keep))
+    budget.check(budget.csv_table(path.name, size, columns))
+
+
+def _kept(header, keep):
+    """The header's names that ``keep`` asks for (all without ``keep``), in the file's order."""
+    return list(header) if keep is None else [name for name in header if name in set(keep)]
 
 
 def _header(path, line, header, columns):
@@ -169,7 +199,7 @@ def _header(path, line, header, columns):
     return header
 
 
-def _plain(path, text, columns):
+def _plain(path, text, columns, keep=None):
     """A file without quotes, read by pandas' parser (fast): every line one record. None where the header ends
     with a comma (read as a quoted file: :func:`_quoted` drops an unnamed empty last column)."""
     import numpy as np
@@ -189,11 +219,11 @@ def _plain(path, text, columns):
         raise ValueError(f"{path}: no data rows after the header")
     frame = pd.read_csv(io.StringIO("\n".join(line for _, line in body)), header=None, names=header, dtype=str,
                         keep_default_na=False, na_values=[""], quoting=csv.QUOTE_NONE, index_col=False,
-                        skip_blank_lines=False)
-    return _located(frame, path, [number for number, _ in body], {})
+                        skip_blank_lines=False, usecols=_kept(header, keep))
+    return _located(frame, path, [number for number, _ in body], {}, header)
 
 
-def _quoted(path, text, columns):
+def _quoted(path, text, columns, keep=None):
     """A file with quoted fields, read record by record (a record may span lines)."""
     import numpy as np
     import pandas as pd
@@ -207,18 +237,21 @@ def _quoted(path, text, columns):
     _check_widths(path, len(header), [(line, f) for line, f, _ in body if len(f) != len(header)], len(body))
     if not body:
         raise ValueError(f"{path}: no data rows after the header")
-    cells = zip(*(fields for _, fields, _ in body))
-    frame = pd.DataFrame({name: pd.Series(c, dtype=str).replace("", np.nan) for name, c in zip(header, cells)},
-                         columns=header)
-    offsets = {(i, header[j]): o for i, (_, _, offs) in enumerate(body) if offs for j, o in enumerate(offs) if o}
-    return _located(frame, path, [line for line, _, _ in body], offsets)
+    kept = _kept(header, keep)
+    where = [header.index(name) for name in kept]
+    frame = pd.DataFrame({name: pd.Series([f[j] for _, f, _ in body], dtype=str).replace("", np.nan)
+                          for name, j in zip(kept, where)}, columns=kept)
+    offsets = {(i, header[j]): o for i, (_, _, offs) in enumerate(body) if offs for j, o in enumerate(offs)
+               if o and header[j] in kept}
+    return _located(frame, path, [line for line, _, _ in body], offsets, header)
 
 
-def _located(frame, path, lines, offsets):
-    """``frame`` with its file and each row's line in ``attrs`` (:func:`place`, :func:`line_of`)."""
+def _located(frame, path, lines, offsets, header):
+    """``frame`` with its file, each row's line and the file's header in ``attrs`` (:func:`place`, :func:`line_of`)."""
     import numpy as np
     frame.attrs["source"] = str(path)
     frame.attrs["lines"] = Lines(np.array(lines), offsets)
+    frame.attrs["header"] = Header(header)
     return frame
 
 

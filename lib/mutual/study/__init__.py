@@ -36,10 +36,10 @@ _ON_FIRST_USE = {
     "simulate_cohort": "cohort_power", "TaskCache": "sweep", "run_tasks": "sweep",
     "implied_effect": "power_summary", "power_table": "power_summary", "recommendations": "power_summary",
     # figures (matplotlib)
-    "plot_condition_means": "plots", "finish_power_axes": "power_plots", "plot_simulated_power": "power_plots",
+    "plot_condition_means": "plots", "MAX_SUBJECT_LINES": "plots", "finish_power_axes": "power_plots", "plot_simulated_power": "power_plots",
 }
 
-__all__ = ["CohortSetting", "CohortTask", "DegenerateDataError", "RMAnova", "Study", "TaskCache", "Team",
+__all__ = ["CohortSetting", "CohortTask", "DegenerateDataError", "MAX_SUBJECT_LINES", "RMAnova", "Study", "TaskCache", "Team",
            "TeamingConfig", "arcs_against_clusters", "avoidance_onset", "code_version", "contrast_sample_size",
            "design_balance", "design_from_f_dofs", "dz_from_summary", "effect_size_from_f", "f_p_value",
            "finish_power_axes", "gpower_table", "implied_effect", "learned_set_cluster", "noncentrality_interval",

@@ -75,9 +75,14 @@ def plot_frame(ax, record, config, index=-1, trail=3.0):
     return times[k]
 
 
+#: subjects drawn as thin lines at most: more make one grey band (200 000 lines took minutes to draw)
+MAX_SUBJECT_LINES = 200
+
+
 def plot_condition_means(ax, anova, tukey=None, colors=None, show_subjects=True):
     """Fig. 5.4: each level's mean with standard-error bars (SE = sd / sqrt(n) over subjects), the
-    subjects' own values as thin lines, and Tukey significance brackets (``tukey``, optional)."""
+    subjects' own values as thin lines (up to :data:`MAX_SUBJECT_LINES` subjects; more are not drawn),
+    and Tukey significance brackets (``tukey``, optional)."""
     if not isinstance(anova, RMAnova):
         raise ValueError(f"anova must be an RMAnova, got {type(anova).__name__}")
     levels = list(anova.levels)
@@ -85,7 +90,7 @@ def plot_condition_means(ax, anova, tukey=None, colors=None, show_subjects=True)
     errors = anova.standard_errors()
     means, se = np.array([anova.means[lv] for lv in levels]), np.array([errors[lv] for lv in levels])
     x = np.arange(len(levels))
-    if show_subjects:
+    if show_subjects and len(cells) <= MAX_SUBJECT_LINES:
         for row in cells.to_numpy():
             ax.plot(x, row, color="0.75", lw=0.6, zorder=1)
     ax.bar(x, means, yerr=se, capsize=4, color=colors or None, alpha=0.85, zorder=2,

@@ -20,7 +20,8 @@ statistic or a negative F. As R's ``t.test`` and ``aov`` do, we refuse rather th
 * zero residual variance (every subject shows exactly the same differences between levels): F is
   infinite;
 * a pair of levels whose paired differences are all the same (identical columns included), or
-  Likert answers that are all equal: the t statistic is 0/0 or infinite.
+  Likert answers that are all equal: the t statistic is 0/0 or infinite (:func:`paired_t_holm` with
+  ``undefined="leave"`` leaves such a pair's t NaN and names the reason, and tests the other pairs).
 
 Numbers count as equal when they agree to about 13 significant digits of the data's magnitude.
 """
@@ -249,15 +250,47 @@ def tukey_rm(anova, dv=None, within=None, subject=None, aggregate=None, levels=N
     return tukey_from_summary(res.means, res.mse, res.n_subjects)
 
 
-def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, levels=None, allow_large=None):
+def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, levels=None, allow_large=None,
+                  undefined="raise"):
     """Paired t-tests between all pairs of levels, Holm-corrected.
 
     ``cells``: a subject x level table (wide), an :class:`RMAnova` (its cells), or long data with
     ``dv``, ``within`` and ``subject`` named (as :func:`rm_anova`). Returns a DataFrame with
     columns A, B, mean_diff, t, df, p, p_holm. A pair whose differences are all equal (identical
-    levels included) has no defined t: :class:`DegenerateDataError` names the pair. ``allow_large``: as
+    levels included) has no defined t: :class:`DegenerateDataError` names the pair (``undefined="raise"``),
+    or (``undefined="leave"``) its t, p and p_holm are NaN, its reason is in ``out.attrs["undefined"]``
+    (``{(A, B): reason}``), and Holm's correction runs over the pairs that have a t. ``allow_large``: as
     :func:`tukey_rm`.
     """
+    if undefined not in ("raise", "leave"):
+        raise ValueError(f"undefined must be 'raise' or 'leave', got {undefined!r}")
+    wide = _wide_cells(cells, dv, within, subject, aggregate, levels)
+    y = wide.to_numpy(dtype=float)
+    _check_pairs(y.shape[1], y.shape[0], allow_large)
+    rows, reasons = [], {}
+    for (i, a), (j, b) in combinations(enumerate(wide.columns), 2):
+        e = _exponent(y[:, [i, j]])       # each pair in its own units: t is scale-free, and a huge value in another
+        z = np.ldexp(y[:, [i, j]], -e)    # level leaves this pair's digits alone (1e-170 or 1e170 alike)
+        d = z[:, 0] - z[:, 1]
+        why = _constant_differences(d, z, e, y[:, [i, j]])
+        if why is not None:
+            if undefined == "raise":
+                raise DegenerateDataError(f"levels {a!r} and {b!r}: {why}")
+            reasons[(a, b)] = why
+            rows.append((a, b, float(_ldexp_quiet(d.mean(), e)), np.nan, len(d) - 1, np.nan))
+            continue
+        res = stats.ttest_rel(z[:, 0], z[:, 1])
+        rows.append((a, b, float(_ldexp_quiet(d.mean(), e)), float(res.statistic), int(res.df), float(res.pvalue)))
+    out = pd.DataFrame(rows, columns=["A", "B", "mean_diff", "t", "df", "p"])
+    defined = out["p"].notna().to_numpy()
+    out["p_holm"] = np.nan
+    out.loc[defined, "p_holm"] = holm(out["p"].to_numpy()[defined])
+    out.attrs["undefined"] = reasons
+    return out
+
+
+def _wide_cells(cells, dv, within, subject, aggregate, levels):
+    """The checked subject x level table of :func:`paired_t_holm`'s ``cells``."""
     if isinstance(cells, RMAnova):
         wide = cells.cells
     elif dv is not None or within is not None or subject is not None:
@@ -276,24 +309,18 @@ def paired_t_holm(cells, dv=None, within=None, subject=None, aggregate=None, lev
         raise ValueError(f"cells must be a subject x level table with >= 2 subjects and >= 2 levels, got shape {y.shape}")
     if not np.isfinite(y).all():
         raise ValueError("cells must be a complete table of finite numbers (no NaN: every subject needs every level)")
-    _check_pairs(y.shape[1], y.shape[0], allow_large)
-    rows = []
-    for (i, a), (j, b) in combinations(enumerate(wide.columns), 2):
-        e = _exponent(y[:, [i, j]])       # each pair in its own units: t is scale-free, and a huge value in another
-        z = np.ldexp(y[:, [i, j]], -e)    # level leaves this pair's digits alone (1e-170 or 1e170 alike)
-        d = z[:, 0] - z[:, 1]
-        if _negligible(float(np.sum((d - d.mean()) ** 2)), z.ravel()):
-            what = "identical for every subject" if not d.any() else \
-                f"the same for every subject ({_ldexp_quiet(d[0], e):g})" if np.all(d == d[0]) else \
-                "the same for every subject to within 1e-13 of the largest value " \
-                f"({np.max(np.abs(y[:, [i, j]])):.6g}): too little to tell from rounding"
-            raise DegenerateDataError(f"levels {a!r} and {b!r}: the paired differences are {what}, so the paired t "
-                                      "statistic is undefined (zero variance)")
-        res = stats.ttest_rel(z[:, 0], z[:, 1])
-        rows.append((a, b, float(_ldexp_quiet(d.mean(), e)), float(res.statistic), int(res.df), float(res.pvalue)))
-    out = pd.DataFrame(rows, columns=["A", "B", "mean_diff", "t", "df", "p"])
-    out["p_holm"] = holm(out["p"].to_numpy())
-    return out
+    return wide
+
+
+def _constant_differences(d, z, e, values):
+    """Why the paired t of differences ``d`` (in units ``2^e``) is undefined, or None when it is defined."""
+    if not _negligible(float(np.sum((d - d.mean()) ** 2)), z.ravel()):
+        return None
+    what = "identical for every subject" if not d.any() else \
+        f"the same for every subject ({_ldexp_quiet(d[0], e):g})" if np.all(d == d[0]) else \
+        "the same for every subject to within 1e-13 of the largest value " \
+        f"({np.max(np.abs(values)):.6g}): too little to tell from rounding"
+    return f"the paired differences are {what}, so the paired t statistic is undefined (zero variance)"
 
 
 def holm(p):
@@ -309,18 +336,20 @@ def holm(p):
     return out
 
 
-def pairwise_comparisons(anova, as_records=False, allow_large=None):
+def pairwise_comparisons(anova, as_records=False, allow_large=None, undefined="raise"):
     """Every pair of levels of an :class:`RMAnova`: the RM-error Tukey HSD (``q``, ``p_tukey``) beside the
     paired t-test with Holm's correction (``t``, ``df``, ``p_t``, ``p_holm``), one row per pair with
     ``A``, ``B``, ``mean_A``, ``mean_B`` and ``diff = mean_A - mean_B``. ``as_records=True`` returns a list
     of dicts of plain Python numbers and strings (ready for JSON). Raises :class:`DegenerateDataError` as
-    :func:`paired_t_holm` does, and :class:`mutual.budget.TooLarge` for more pairs than the limits allow
-    (``allow_large`` as :func:`tukey_rm`)."""
+    :func:`paired_t_holm` does (``undefined="leave"``: NaN t and p for such a pair, the reasons in
+    ``attrs["undefined"]``; Tukey's q uses the pooled error term and stays defined), and
+    :class:`mutual.budget.TooLarge` for more pairs than the limits allow (``allow_large`` as :func:`tukey_rm`)."""
     if not isinstance(anova, RMAnova):
         raise ValueError(f"anova must be an RMAnova, got {type(anova).__name__}")
     tukey = tukey_rm(anova, allow_large=allow_large).rename(columns={"p": "p_tukey"})
-    paired = paired_t_holm(anova, allow_large=allow_large).rename(columns={"p": "p_t"}).drop(columns="mean_diff")
-    table = tukey.merge(paired, on=["A", "B"], how="left")
+    paired = paired_t_holm(anova, allow_large=allow_large, undefined=undefined)
+    table = tukey.merge(paired.rename(columns={"p": "p_t"}).drop(columns="mean_diff"), on=["A", "B"], how="left")
+    table.attrs["undefined"] = paired.attrs["undefined"]
     if not as_records:
         return table
     plain = {"A": str, "B": str, "df": int}

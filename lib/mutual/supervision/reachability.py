@@ -154,9 +154,13 @@ def _check_domain(w_maxes, radius, speed, spec):
     reach = unsafe_reach(float(np.min(w_maxes)), radius, speed)
     need = reach + 4 * spec.spacings[0]
     if spec.half_width < need:
+        room = spec.half_width - 4 * spec.spacings[0]      # reach = sqrt(2 (v / w) r + r^2) <= room, solved for w
+        fits = f"the smallest w_max it holds is {2 * speed * radius / (room ** 2 - radius ** 2):.3g}" \
+            if room > radius else "no w_max fits: the obstacle itself is wider than the grid"
         raise ValueError(f"grid_spec.half_width={spec.half_width} is too small: the unsafe set of w_max="
                          f"{np.min(w_maxes):g} (obstacle radius {radius:g}, speed {speed:g}) reaches {reach:.3g} "
-                         f"from the obstacle centre; need at least {need:.3g} (reach + 4 cells)")
+                         f"from the obstacle centre; need at least {need:.3g} (reach + 4 cells); at this radius "
+                         f"and speed {fits}")
 
 
 def _check_library_args(w_maxes, obstacle_radius, grid_spec, solver, speed, d_max, batch, method):
