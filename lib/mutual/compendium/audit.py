@@ -1,4 +1,4 @@
-"""Read, from a notebook's code, what it reports to the reproduction report (issue 10).
+"""Read, from a notebook's code, what it reports to the reproduction report.
 
 :class:`NotebookCode` parses the code cells with :mod:`ast` and finds the claims each
 ``write_results(notebook, {claim_id: {"value": ..., "computed_by": ..., "note": ...}})`` call

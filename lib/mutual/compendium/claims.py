@@ -192,7 +192,7 @@ def verdict(claim, got, scan=None):
 
 
 def rule_problems(claim):
-    """Why the claim's comparison rule could not fail, as far as the table shows (issue 10):
+    """Why the claim's comparison rule could not fail, as far as the table shows:
     a tolerance as wide as the thesis value itself (``abs``) or 100% (``rel``), an infinite bound,
     ``>=`` a non-positive number (any count, distance, time or probability passes), ``<=`` 1 or
     more on a probability or share. Returns a list of sentences, empty when none applies."""

@@ -1,4 +1,4 @@
-"""Notebooks reach git without outputs, and exploring them never dirties the repository (issue 12).
+"""Notebooks reach git without outputs, and exploring them never dirties the repository.
 
 One definition of a *stripped* notebook (nbstripout's ``strip_output``: no outputs, no execution
 counts, cell ids kept, JupyterLab's volatile metadata dropped) serves three places:

@@ -1,4 +1,4 @@
-"""Run records: what a results file says about the run that wrote it (issue 13).
+"""Run records: what a results file says about the run that wrote it.
 
 The notebook runner passes the run's mode, the notebook's path and a hash of its code to the
 kernel in environment variables; :func:`mutual.compendium.results.write_results` copies them into

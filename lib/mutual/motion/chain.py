@@ -20,7 +20,7 @@ Numerics: with the whitened residual ``r_t = L_t'(u_t - K_t x_t - k_t) = rho_t -
 linear in the controls and the start, ``e_t = L_t' k_t``), a log-likelihood ratio is
 ``-1/2 sum (r0 - r1).(r0 + r1)`` with ``r0 - r1 = (rho0 - rho1) - (e0 - e1)``: hypotheses that
 share their quadratic part (eq. (6.17)'s reaching costs) have ``rho0 = rho1`` exactly, so the ratio
-is exact for controls far beyond where the squares themselves lose it (issue 22). What float64
+is exact for controls far beyond where the squares themselves lose it. What float64
 cannot represent is refused (:class:`NotRepresentable`), never returned as NaN or inf.
 """
 

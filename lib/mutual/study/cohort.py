@@ -333,7 +333,7 @@ def write_simulated_study(study, folder):
     folder = Path(folder)
     write_table(study.trials, folder / "ch5_simulated_phase3.csv", "trials")
     # the simulated states to 6 significant digits: their last bits follow the CPU's sin/cos, and the committed
-    # bytes must not (issue 22 section 6); the counts and answers of the trial tables are written exactly
+    # bytes must not; the counts and answers of the trial tables are written exactly
     write_table(study.interventions, folder / "ch5_simulated_phase2_interventions.csv", "interventions", digits=6)
     analysed = study.trials.drop_duplicates(["participant", "trial"])[DESIGN_COLUMNS].reset_index(drop=True)
     write_table(illustrative_questionnaire(analysed, seed=0), folder / "ch5_illustrative_questionnaire.csv", "trials")

@@ -1,4 +1,4 @@
-"""SIMULATED power of the chapter 5 study with its own generative model (issue 16; Sec. 5.2-5.3.1).
+"""SIMULATED power of the chapter 5 study with its own generative model (Sec. 5.2-5.3.1).
 
 A *cohort* is a stream of simulated recruits, each drawn from the documented supervisor types of
 :func:`mutual.study.cohort.simulated_recruits` (Fig. 5.5's spread) in the proportions of a

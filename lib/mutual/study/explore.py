@@ -1,4 +1,4 @@
-"""Live views of the SIMULATED chapter 5 study for the notebook's Explore section (issue 12).
+"""Live views of the SIMULATED chapter 5 study for the notebook's Explore section.
 
 Each view is a plain function returning a :class:`matplotlib.figure.Figure` (built without
 pyplot, so nothing is shown twice); the notebook wraps them in ipywidgets. They use the quick

@@ -1,4 +1,4 @@
-"""Analytic power for replicating the chapter 5 study (issue 16; the study: Sec. 5.2-5.3.1).
+"""Analytic power for replicating the chapter 5 study (the study: Sec. 5.2-5.3.1).
 
 The omnibus test is the one-way repeated-measures ANOVA of Sec. 5.3.1 (``F(2, 20) = 8.72`` with
 11 participants and 3 safe sets). Its power follows G*Power's "ANOVA: repeated measures, within

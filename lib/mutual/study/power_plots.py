@@ -1,4 +1,4 @@
-"""Figures of the replication planner (issue 16): power curves with their Monte Carlo intervals, and
+"""Figures of the replication planner: power curves with their Monte Carlo intervals, and
 the Explore view of the analytic power (a ``matplotlib.figure.Figure``, no pyplot)."""
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Interactive views for the Explore section of notebook 03 (issue 12): plain functions that
+"""Interactive views for the Explore section of notebook 03: plain functions that
 return a :class:`matplotlib.figure.Figure`, so the notebook's widgets stay thin and tests can
 call them without a browser.
 
