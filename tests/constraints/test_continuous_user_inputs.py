@@ -209,9 +209,14 @@ def test_the_cli_runs_a_two_dimensional_control_end_to_end(tmp_path, capsys):
     recorded = table[["vx", "vy"]].dropna().to_numpy()
     assert {tuple(u) for u in recorded} <= {(1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (-1.0, 0.0), (0.0, 0.0)}
     assert main(["constraints", "infer-continuous", str(tmp_path / "sim" / "trajectories.csv"), "--system", str(path),
-                 "--inline", "--rounds", "1", "--out", str(tmp_path / "inf"), "--no-progress", "--json"]) == 0
+                 "--model", "cells", "--inline", "--rounds", "1", "--out", str(tmp_path / "inf"), "--no-progress",
+                 "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["controls"]["recorded_snapped"] == 6 * 12 and result["n_controls"] == 5
+    assert main(["constraints", "infer-continuous", str(tmp_path / "sim" / "trajectories.csv"), "--system", str(path),
+                 "--rounds", "1", "--out", str(tmp_path / "points"), "--no-progress", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)                       # the default points model uses them as recorded
+    assert result["model"] == "points" and result["n_controls"] == 5 and result["controls_inferred"] == 0
 
 
 def test_the_cli_names_the_system_file_for_a_failure_inside_the_dynamics(tmp_path, capsys):

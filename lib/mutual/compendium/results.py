@@ -127,6 +127,12 @@ def _beside(notebook, cid, basis, beside):
     return {"value": _plain(beside["value"]), "note": str(beside["note"]), "computed_by": str(beside["computed_by"])}
 
 
+def simulated_beside(value, note, computed_by, prefix="SIMULATED: "):
+    """A simulated value to stand beside a row whose own number needs the original data (the row's
+    ``"beside"`` entry): ``{"value", "computed_by", "note"}``, the note led by ``prefix``."""
+    return {"value": value, "computed_by": computed_by, "note": prefix + note}
+
+
 def write_results(notebook, claims, simulated=False):
     """Write ``<output folder>/results/<notebook>.json`` from ``{claim_id: entry}``.
 

@@ -5,7 +5,7 @@
 * :func:`demos_sweep` -- boundary error against the number of demonstrations (several draws);
 * :func:`robustness` -- one row per hyperparameter variant (resolution, time step, control set,
   temperature, scheme, samples, thresholds);
-* :func:`seeded_runs`, :func:`claim_verdict` -- a claim checked over seeds and settings against the truth
+* :func:`seeded_recordings`, :func:`seeded_mppi`, :func:`seeded_runs`, :func:`claim_verdict` -- a claim checked over seeds and settings against the truth
   and the naive bound (the tightest bound the recordings allow), with a verdict by CLAIMS.md's rules;
 * :func:`measured` -- a run's wall time and peak memory in a fresh process (no timings reach the
   notebook's saved results: they vary from run to run).
@@ -20,6 +20,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
+from .demonstrators import mppi_rollouts, rollout, starts_around
 from .discretization import discretize
 from .grid import Grid
 from .inference import boundary_errors, infer
@@ -187,6 +188,21 @@ def judged(run, recording, truth, tolerance=0.05, obstacle_tolerance=0.1):
         value = truth.value if truth.kind == "bound" else truth.radius
         row["interval covers truth"] = bool(row["right kind"] and low <= value <= high)
     return row
+
+
+def seeded_recordings(demonstrator, noise=0.0, *, start, spread, n, record_every=2):
+    """``make_recording`` for :func:`seeded_runs`: seed ``s`` -> ``n`` demonstrations of ``demonstrator``
+    (:func:`~.demonstrators.rollout` with action ``noise``) from starts drawn around ``start`` +- ``spread``
+    with seed ``s``, the rollout seeded ``s + 1``."""
+    return lambda s: rollout(demonstrator, starts_around(start, spread, n, s), s + 1, noise=noise,
+                             record_every=record_every)
+
+
+def seeded_mppi(problem, hidden, *, start, spread, n, **options):
+    """``make_recording`` for :func:`seeded_runs`: seed ``s`` -> ``n`` MPPI demonstrations
+    (:func:`~.demonstrators.mppi_rollouts` with ``options``) from starts drawn around ``start`` +- ``spread``
+    with seed ``s``, the planner seeded ``s + 1``."""
+    return lambda s: mppi_rollouts(problem, hidden, starts_around(start, spread, n, s), s + 1, **options)
 
 
 def seeded_runs(problem, make_recording, seeds, truth, setting="", **options):
