@@ -18,8 +18,8 @@ ANOVA = ["study", "anova", str(STUDY), "--dv", "value", "--within", "treatment",
          "--where", "measure=false_positives", "--aggregate", "mean", "--no-progress"]
 
 
-WRITTEN = {"anova_value_false_positives.csv", "pairwise_value_false_positives.csv", "cells_value_false_positives.csv",
-           "means_value_false_positives.png"}
+WRITTEN = {"anova_value+measure=false_positives.csv", "pairwise_value+measure=false_positives.csv", "cells_value+measure=false_positives.csv",
+           "means_value+measure=false_positives.png"}
 
 
 def _error(capsys):
@@ -34,10 +34,10 @@ def test_a_run_leaves_all_its_outputs(fresh, tmp_path, capsys):
     if not fresh:
         out.mkdir()
         (out / "mine.txt").write_text("kept")
-        (out / "anova_value_false_positives.csv").write_text("stale")
+        (out / "anova_value+measure=false_positives.csv").write_text("stale")
     assert main(ANOVA + ["--out", str(out)]) == 0
     assert {p.name for p in out.iterdir()} == WRITTEN | (set() if fresh else {"mine.txt"})
-    assert (out / "anova_value_false_positives.csv").read_text() != "stale"
+    assert (out / "anova_value+measure=false_positives.csv").read_text() != "stale"
     assert out.stat().st_mode & 0o755 == 0o755          # readable by others, as a folder mkdir makes
     assert not [p for p in tmp_path.rglob(".*")], "a temporary folder was left"
 

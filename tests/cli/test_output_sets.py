@@ -61,6 +61,27 @@ def test_requests_whose_names_clean_to_the_same_text_write_different_files(here,
     assert [n for n in names if n.startswith("anova_a-b-") and len(n) == len("anova_a-b-12345678.csv")]
 
 
+def test_every_request_of_a_small_family_gets_its_own_name():
+    """Brute force: --dv and --where combinations that join to the same text (score + g=A and score_A, a b
+    and a-b, g=b_c and g=b, h=c) all map to different names; names stay readable where every part is plain."""
+    from argparse import Namespace
+    from mutual.cli.study import _stem
+    dvs = ["a", "a_b", "a b", "a-b", "a_b_c", "score", "score_A"]
+    wheres = [[], ["g=b"], ["h=b"], ["g=b", "h=c"], ["g=b_c"], ["g=A"], ["g=b c"]]
+    stems = {(dv, tuple(w)): _stem(Namespace(dv=dv, where=w)) for dv in dvs for w in wheres}
+    assert len(set(stems.values())) == len(stems)
+    assert stems[("score_A", ())] == "score_A" and stems[("score", ("g=A",))] == "score+g=A"
+    assert stems[("a b", ("g=b c",))].startswith("a-b+g=b-c-")
+
+
+def test_a_filtered_request_and_a_column_named_like_it_write_different_files(here, capsys):
+    Path("data.csv").write_text("who,cond,g,y,y_A\n" + "".join(
+        f"s{i},{c},A,{_RANDOM.gauss(j, 1):.4f},{_RANDOM.gauss(-j, 1):.4f}\n" for i in range(1, 5) for j, c in enumerate("abc")))
+    assert main(anova("y") + ["--where", "g=A"]) == 0 and main(anova("y_A")) == 0
+    names = sorted(p.name for p in (here / "out").iterdir())
+    assert len(names) == 8 and "anova_y_A.csv" in names, names
+
+
 def test_an_output_never_replaces_the_runs_input(here, capsys):
     (here / "out").mkdir()
     (here / "out" / "cells_y.csv").write_text(STUDY)

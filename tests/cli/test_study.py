@@ -66,8 +66,8 @@ def test_study_anova_on_the_example(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "Greenhouse-Geisser" in run.stdout and "Tukey" in run.stdout
     written = {p.name for p in tmp_path.iterdir()}
-    assert {"anova_value_false_positives.csv", "pairwise_value_false_positives.csv",
-            "means_value_false_positives.png"} <= written
+    assert {"anova_value+measure=false_positives.csv", "pairwise_value+measure=false_positives.csv",
+            "means_value+measure=false_positives.png"} <= written
 
 
 def test_study_anova_on_a_malformed_file_names_the_file_line_and_column(tmp_path):

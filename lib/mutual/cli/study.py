@@ -10,6 +10,7 @@ level names the ``--within`` column holds.
 
 import hashlib
 import importlib
+import json
 import math
 import re
 
@@ -37,8 +38,9 @@ machine): 2.5-3.3 s of CPU, most of it importing scipy.stats, pandas and matplot
 writes to --out:  anova_<name>.csv (the test), pairwise_<name>.csv (Tukey and Holm),
                   cells_<name>.csv (the subject x level table analysed),
                   means_<name>.png (level means with SE bars and Tukey brackets; no brackets above
-                  6 levels, no figure above 30: the tables hold them); <name>: --dv and the --where
-                  values, with a hash of them where they hold characters other than A-Z a-z 0-9 _ . -
+                  6 levels, no figure above 30: the tables hold them); <name>: --dv, then +COL=VALUE
+                  per --where (value+measure=trips), with a hash of the request where they
+                  hold characters other than A-Z a-z 0-9 _ . - or run past 80
 """
 
 EXAMPLE = """\
@@ -113,13 +115,23 @@ def _shown(name, width=40):
     return text if len(text) <= width else text[:width - 4] + "...'"
 
 
+SAFE = re.compile(r"[A-Za-z0-9_.-]+")
+
+
 def _stem(args):
-    """The outputs' name: the --dv and --where values as written, or, where they hold other characters or run
-    long, their cleaned form plus a hash of the text, so that two requests (--dv 'a b', --dv 'a-b') never share
-    file names."""
-    text = "_".join([args.dv] + [v for _, v in _filters(args.where)])
-    stem = re.sub(r"[^A-Za-z0-9_.-]+", "-", text).strip("-")[:80] or "dv"
-    return stem if stem == text else f"{stem}-{hashlib.sha256(text.encode()).hexdigest()[:8]}"
+    """The outputs' name: --dv, then +COL=VALUE for each --where (``value+measure=trips``) when every part is
+    all A-Z a-z 0-9 _ . -; otherwise the parts cleaned to those characters plus a hash of the whole request.
+    Parts cannot hold ``+`` or ``=``, so two requests never share file names (--dv score --where g=A and
+    --dv score_A; --dv 'a b' and --dv 'a-b')."""
+    filters = _filters(args.where)
+    parts = [args.dv] + [f"{c}={v}" for c, v in filters]
+    if all(SAFE.fullmatch(p) for p in [args.dv] + [x for pair in filters for x in pair]):
+        stem = "+".join(parts)
+        if len(stem) <= 80:
+            return stem
+    cleaned = "+".join(re.sub(r"[^A-Za-z0-9_.=-]+", "-", p).strip("-") or "x" for p in parts)[:80]
+    request = json.dumps([args.dv, filters], ensure_ascii=False)
+    return f"{cleaned}-{hashlib.sha256(request.encode()).hexdigest()[:8]}"
 
 
 def analyse(data, dv, within, subject, aggregate=None, levels=None):
