@@ -303,3 +303,22 @@ def test_2000_steps_give_the_closed_form_motion_and_evidence():
     np.testing.assert_allclose(xs[-1], (g1 + (g1 - g0) / 0.5) / 2, rtol=1e-9)
     J1_, J0_ = leg.reaching_cost(G1, 1.0 / 2000), leg.reaching_cost(G0, 1.0 / 2000)
     assert out["evidence"]["legible"][0] == pytest.approx(J1_.value(xs, us) - J0_.value(xs, us), rel=1e-9)
+
+
+DUBINS = {**BASE, "dynamics": "dubins", "start": [0.0, 0.0, 0.0]}
+
+
+@pytest.mark.parametrize("heading, warned", [(90.0, True), (-180.0, True), (270.0, True), (12.0, True),
+                                             (1.5707963, False), (-3.14159, False), (6.0, False)])
+def test_a_heading_in_degrees_is_warned_about_naming_the_key(heading, warned):
+    """A start heading more than a turn outside [-pi, pi] reads as degrees (90 is 90 rad, about 2.04 rad after
+    wrapping): warned, naming the key; headings in radians pass silently."""
+    import warnings
+    from mutual.inputs import InputWarning
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        legible_spec({**DUBINS, "start": [0.0, 0.0, heading]}, "spec.toml")
+    messages = [str(w.message) for w in seen if issubclass(w.category, InputWarning)]
+    assert bool(messages) == warned, messages
+    if warned:
+        assert "key 'start'" in messages[0] and "degrees" in messages[0]

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import budget
-from ..inputs import Keys, read_toml, shown
+from ..inputs import Keys, angle_unit_warning, read_toml, shown, warn
 
 DYNAMICS = ("single-integrator", "dubins")
 _KEYS = {"dynamics", "start", "goal", "distractors", "horizon", "steps", "alpha", "eta", "terminal_weight",
@@ -170,6 +170,10 @@ def legible_spec(mapping, source="spec"):
     spec = LegibleSpec(dynamics, start, goal, distractors, horizon, steps, alpha, eta, anticipation,
                        *(float(w) for w in weights))
     _check_magnitudes(keys, spec)
+    if dynamics == "dubins":
+        unit = angle_unit_warning([start[2]], f"{source}: key 'start', the heading theta (radians)")
+        if unit:
+            warn(unit)
     return spec
 
 
