@@ -92,6 +92,43 @@ def test_simulate_then_infer_finds_the_hidden_limit_of_a_fresh_recording(tmp_pat
     assert out["n_demonstrations"] == 20 and out["steps"] == 20
 
 
+LEAVES_THE_BOX = """\
+system = "double_integrator"
+[state]
+low = [-2.0, -2.0]
+high = [2.0, 2.0]
+cells = [21, 21]
+[control]
+values = [-1.0, 0.0, 1.0]
+[time]
+dt = 0.1
+horizon = 30
+[reward]
+goal = [1.0, 0.0]
+state_weights = [1.0, 0.1]
+[simulate]
+hidden = ["velocity <= 0.5"]
+start = [-1.0, 0.0]
+n = 15
+"""
+
+
+def test_simulate_refuses_demonstrations_that_leave_the_box_before_writing(tmp_path, capsys):
+    """A demonstrator that backs over the box's edge (position -2.01 of [-2, 2]) would write a file that
+    infer-continuous refuses: simulate says so, names the coordinate, and writes nothing."""
+    (tmp_path / "di.toml").write_text(LEAVES_THE_BOX)
+    assert main(["constraints", "simulate", "--system", str(tmp_path / "di.toml"), "--out", str(tmp_path / "sim"),
+                 "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "leave the box" in err and "'position' reaches -2.01" in err and "widen [state] low/high" in err
+    assert not (tmp_path / "sim").exists()
+    (tmp_path / "wide.toml").write_text(LEAVES_THE_BOX.replace("[-2.0, -2.0]", "[-2.5, -2.5]"))
+    run_json(capsys, "constraints", "simulate", "--system", tmp_path / "wide.toml", "--out", tmp_path / "sim")
+    out = run_json(capsys, "constraints", "infer-continuous", tmp_path / "sim" / "trajectories.csv", "--system",
+                   tmp_path / "wide.toml", "--rounds", "1", "--out", tmp_path / "inferred")
+    assert out["n_demonstrations"] == 15
+
+
 def test_simulate_can_leave_the_controls_out(tmp_path, capsys):
     (tmp_path / "di.toml").write_text(DOUBLE_INTEGRATOR)
     made = run_json(capsys, "constraints", "simulate", "--system", tmp_path / "di.toml", "--n", "3", "--no-controls",

@@ -270,6 +270,7 @@ def _simulate_system(args):
     if args.no_controls:
         from dataclasses import replace
         recording = replace(recording, controls=None)
+    _check_inside(problem.grid, recording, path)
     with common.output_set(args) as files:
         write_recording(files.path("trajectories.csv"), recording, problem.system.state_names,
                         problem.system.control_names)
@@ -286,6 +287,22 @@ def _simulate_system(args):
              f"seed {seed}) under hidden constraints: {', '.join(texts) or 'none'}",
              *[f"  {name}: {lo:.4g} .. {hi:.4g}" for name, (lo, hi) in ranges.items()], f"wrote {out}"]
     common.report(args, "\n".join(lines), results)
+
+
+def _check_inside(grid, recording, path):
+    """Refuse, before anything is written, demonstrations that leave the system's box: ``infer-continuous``
+    would refuse the file (the demonstrator plans on the box, the continuous dynamics can overshoot its edge)."""
+    import numpy as np
+    states = np.concatenate(recording.states)
+    out = grid.outside(states)
+    if out.any():
+        i = int(np.argmax(out.any(axis=0)))
+        values = states[out[:, i], i]
+        far = float(values[np.argmax(np.abs(values - np.clip(values, grid.low[i], grid.high[i])))])
+        raise common.InputError(
+            f"{path}: {int(out.any(axis=1).sum())} of {len(states)} simulated samples leave the box of the system "
+            f"({grid.names[i]!r} reaches {far:.4g}, outside [{grid.low[i]:g}, {grid.high[i]:g}]); infer-continuous "
+            "would refuse them: widen [state] low/high in the system file (nothing was written)")
 
 
 def _tempered(reward, temperature):
