@@ -129,10 +129,23 @@ def test_the_command_lines_time_limit_comes_from_the_environment(text, minutes):
     assert budget.command_line_minutes({budget.MINUTES_ENV: text}) == minutes
 
 
-@pytest.mark.parametrize("text", ["0", "-3", "soon", "nan"])
+@pytest.mark.parametrize("text", ["0", "-3", "soon", "nan", "inf", "1e400", "-inf"])
 def test_a_bad_time_limit_is_named(text):
     with pytest.raises(ValueError, match=f"MUTUAL_MAX_MINUTES = '{text}'"):
         budget.command_line_minutes({budget.MINUTES_ENV: text})
+
+
+def test_the_quick_grid_is_offered_only_to_a_larger_grid():
+    from mutual.supervision import FULL_GRID, QUICK_GRID
+    assert budget.QUICK_GRID_NODES == math.prod(QUICK_GRID.shape)
+    assert "--grid quick" in budget.value_library(100, FULL_GRID.shape).knob
+    assert "--grid quick" not in budget.value_library(100, QUICK_GRID.shape).knob
+
+
+def test_an_mppi_request_names_its_samples_and_plan_steps():
+    plain, mppi = budget.rollouts(2, 40, 4, 3), budget.rollouts(2, 40, 4, 3, plans=10 ** 9, plan_steps=20)
+    assert "[simulate] samples" in mppi.knob and "[simulate] plan_steps" in mppi.knob and "MPPI" in mppi.what
+    assert "[simulate] samples" not in plain.knob
 
 
 def _refused_quickly(call):

@@ -129,7 +129,8 @@ def available_bytes():
 
 
 def command_line_minutes(environ=os.environ):
-    """The command line's time limit in minutes: ``$MUTUAL_MAX_MINUTES`` (a positive number) or :data:`MINUTES`."""
+    """The command line's time limit in minutes: ``$MUTUAL_MAX_MINUTES`` (a positive finite number) or
+    :data:`MINUTES`."""
     text = environ.get(MINUTES_ENV, "").strip()
     if not text:
         return MINUTES
@@ -137,8 +138,9 @@ def command_line_minutes(environ=os.environ):
         value = float(text)
     except ValueError:
         value = math.nan
-    if not (value > 0):
-        raise ValueError(f"${MINUTES_ENV} = {text!r}: must be a positive number of minutes")
+    if not (0 < value < math.inf):
+        raise ValueError(f"${MINUTES_ENV} = {text!r}: must be a positive finite number of minutes (--allow-large "
+                         "goes ahead whatever the estimate)")
     return value
 
 
@@ -264,9 +266,15 @@ def rollouts(n, steps, dim, controls=1, substeps=4, record_every=1, plans=0, pla
     demonstrator integrates ``plans`` samples of ``plan_steps`` steps per decision)."""
     integrations = n * steps * (controls * substeps + plans * plan_steps * substeps)
     rows = n * (steps * record_every + 1)
-    return Estimate(f"{int(n):,} demonstrations of {int(steps):,} steps", rows * (ROW_BYTES + 8.0 * dim)
-                    + 8.0 * n * max(plans, 1) * max(plan_steps, 1) * 3, integrations * RK4_SECONDS,
-                    "ask for fewer demonstrations (--n or [simulate] n) or a shorter horizon ([time] horizon)")
+    fewer = "fewer demonstrations (--n or [simulate] n) or a shorter horizon ([time] horizon)"
+    if plans:
+        what = (f"{int(n):,} demonstrations of {int(steps):,} steps, each step planned over {int(plans):,} MPPI "
+                f"samples of {int(plan_steps):,} steps")
+        knob = f"ask for fewer MPPI samples ([simulate] samples), shorter plans ([simulate] plan_steps), {fewer}"
+    else:
+        what, knob = f"{int(n):,} demonstrations of {int(steps):,} steps", f"ask for {fewer}"
+    return Estimate(what, rows * (ROW_BYTES + 8.0 * dim) + 8.0 * n * max(plans, 1) * max(plan_steps, 1) * 3,
+                    integrations * RK4_SECONDS, knob)
 
 
 def gridworld_inference(states, actions, horizon, rounds, demonstrations=0):
@@ -294,14 +302,20 @@ def legible(steps, hypotheses, dynamics="single-integrator"):
                     "use fewer steps or fewer distractors")
 
 
+#: the nodes of the command line's quick grid (mutual.supervision.QUICK_GRID; a test checks they agree)
+QUICK_GRID_NODES = 41 * 41 * 24
+
+
 def value_library(members, shape, computed=None, method="hj"):
     """A library of ``members`` avoid value functions on a grid of ``shape`` nodes (float32, solver state), of
-    which ``computed`` (default all) are solved: by hj-reachability (``method="hj"``) or in closed form."""
+    which ``computed`` (default all) are solved: by hj-reachability (``method="hj"``) or in closed form. The
+    knob offers the quick grid only to a request on a larger grid."""
     nodes, computed = _product(shape), members if computed is None else computed
     per_node = HJ_NODE_SECONDS if method == "hj" else CLOSED_FORM_NODE_SECONDS
+    knob = "use fewer library members (--w-max)" + (" or a smaller grid (--grid quick)"
+                                                    if nodes > QUICK_GRID_NODES else "")
     return Estimate(f"{int(members):,} value functions on {_x(shape)} nodes ({int(computed):,} to compute)",
-                    4.0 * nodes * (members + 12), per_node * nodes * computed,
-                    "use fewer library members (--w-max) or a smaller grid (--grid quick)")
+                    4.0 * nodes * (members + 12), per_node * nodes * computed, knob)
 
 
 def sample_sizes(count, what="--n"):
