@@ -80,7 +80,8 @@ def test_a_seed_that_is_not_a_non_negative_integer_is_named(seed):
         sample_demonstrations(grid.mdp, 2, rng=seed)
 
 
-@pytest.mark.parametrize("text", ["99999999999999999999999", "1e30", "-1e300"])
+@pytest.mark.parametrize("text", ["99999999999999999999999", "1e30", "-1e300", "9007199254740993", "9007199254740992",
+                                  "-9007199254740993"])
 def test_a_huge_state_in_the_demonstrations_is_named_as_written(tmp_path, text):
     path = tmp_path / "demos.csv"
     path.write_text(f"demo,t,state,action\n0,0,0,0\n0,1,{text},\n")

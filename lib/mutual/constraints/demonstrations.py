@@ -163,15 +163,9 @@ def write_demonstrations(path, demos):
 
 
 def _integers(frame, column, allow_empty=False):
-    """Column ``column`` as float values (nan where empty), refusing text, fractions and integers beyond 2^53
+    """Column ``column`` as float values (nan where empty), refusing text, fractions and integers of 2^53 or more
     (beyond exact floats and any index: never wrap around) with a ValueError naming the file, line and column."""
-    values = number_column(frame, column, allow_empty, whole=True, what="an integer")
-    huge = np.abs(np.nan_to_num(values)) > 2 ** 53
-    if huge.any():
-        label = frame.index[int(np.flatnonzero(huge)[0])]
-        raise ValueError(f"{place(frame, label, column)}: {frame[column].loc[label]!r} is too large "
-                         f"(|{column}| <= 2^53)")
-    return values
+    return number_column(frame, column, allow_empty, whole=True, what="an integer")
 
 
 def load_demonstrations(path, mdp):

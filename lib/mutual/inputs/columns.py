@@ -69,8 +69,8 @@ def _row(frame, i):
 def number_column(frame, column, allow_empty=False, whole=False, low=None, high=None, what=None,
                   distinct=False):
     """``column`` as floats (nan where empty, with ``allow_empty``), refusing -- naming the file, the line and
-    the column of the first -- an empty cell, text, NaN or an infinity, a fraction where ``whole`` numbers
-    belong, a value below ``low`` or above ``high`` (``what`` says what the column must hold, e.g. ``"a count"``).
+    the column of the first -- an empty cell, text, NaN or an infinity, a fraction or a magnitude of 2^53 or more
+    where ``whole`` numbers belong, a value below ``low`` or above ``high`` (``what`` says what the column must hold, e.g. ``"a count"``).
 
     ``distinct``: also refuse two cells written as different numbers that read as the same double (digits
     beyond the 15-17 a double holds, e.g. integers above 2^53): a statistic of them would see no difference.
@@ -98,6 +98,10 @@ def number_column(frame, column, allow_empty=False, whole=False, low=None, high=
     for check in checks:
         if check.any():
             _fail(frame, check, column, lambda i: f"{_shown(raw.iloc[i])} is not {kind}")
+    if whole and (np.abs(np.nan_to_num(values)) >= 2 ** 53).any():
+        _fail(frame, np.abs(np.nan_to_num(values)) >= 2 ** 53, column,
+              lambda i: f"{_shown(raw.iloc[i])} is too large for a whole number here (|{column}| < 2^53: a double "
+                        "holds no larger integer exactly)")
     if distinct and texts is not None:
         _check_distinct(frame, column, texts, values)
     return values
