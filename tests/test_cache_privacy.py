@@ -70,6 +70,30 @@ def test_an_untrusted_cache_is_not_used_and_the_warning_says_where_and_how_to_cl
         assert cache.cache_folder("power") is None
 
 
+def test_nothing_is_created_inside_a_cache_that_cannot_be_trusted(root):
+    _made(root, 0o777)
+    with pytest.warns(CacheWarning):
+        assert cache.cache_folder("reachability") is None
+    assert list(root.iterdir()) == []
+
+
+@pytest.mark.parametrize("fault, offers_chmod", [("root", True), ("parent", False), ("owner", False)])
+def test_chmod_is_offered_only_where_it_helps(tmp_path, monkeypatch, fault, offers_chmod):
+    """A cache folder of the user's that others may write: chmod fixes it. A shared folder above it, or a folder
+    another user owns: chmod cannot, so only MUTUAL_CACHE_DIR is offered."""
+    if fault == "owner" and os.geteuid() != 0:
+        pytest.skip("changing a folder's owner needs root")
+    parent = _made(tmp_path / "shared", 0o777 if fault == "parent" else 0o755)
+    root = _made(parent / "cache", 0o777 if fault == "root" else 0o700, NOBODY if fault == "owner" else None)
+    monkeypatch.setenv("MUTUAL_CACHE_DIR", str(root))
+    cache._WARNED.clear()
+    with pytest.warns(CacheWarning) as seen:
+        assert cache.cache_folder("power") is None
+    text = str(seen[0].message)
+    assert ("chmod -R go-w" in text) == offers_chmod and "MUTUAL_CACHE_DIR" in text, text
+    cache._WARNED.clear()
+
+
 def test_the_key_is_the_users_alone_and_made_once(root):
     key = cache.secret_key()
     path = root / "key"

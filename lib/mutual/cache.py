@@ -78,14 +78,16 @@ def usable_folder(folder, writable=True):
     """``folder`` created if needed (readable by this user only when new), or None with one :class:`CacheWarning`
     when it cannot be created, written (with ``writable``) or trusted (:func:`insecure`)."""
     folder = Path(folder)
-    try:
-        _private_mkdir(folder)
-        if writable and not os.access(folder, os.W_OK | os.X_OK):
-            raise PermissionError(f"{folder} is not writable")
-    except OSError as err:
-        unusable(folder, err)
-        return None
-    reason = insecure(folder)
+    reason = insecure(folder)                 # nothing is created inside a folder that cannot be trusted
+    if not reason:
+        try:
+            _private_mkdir(folder)
+            if writable and not os.access(folder, os.W_OK | os.X_OK):
+                raise PermissionError(f"{folder} is not writable")
+        except OSError as err:
+            unusable(folder, err)
+            return None
+        reason = insecure(folder)
     if reason:
         unusable(folder, reason, doing=advice(folder))
         return None
@@ -104,13 +106,16 @@ def _private_mkdir(folder):
 
 
 def advice(folder):
-    """What to do about a cache that cannot be trusted: where it is, how to fix or clear it."""
+    """What to do about a cache that cannot be trusted: where it is, how to fix or clear it. ``chmod`` is offered
+    only where it helps: every folder at fault is this user's and inside the cache."""
     try:
         root = cache_dir()
     except OSError:
         root = Path(folder)
-    return (f"running without it; make it yours alone (chmod -R go-w {root}), or set MUTUAL_CACHE_DIR to a folder of "
-            f"your own; clearing it is safe: rm -rf {root}")
+    at = _untrusted(folder)
+    inside = at is None or (os.stat(at[0]).st_uid == os.geteuid() and at[0].is_relative_to(os.path.realpath(root)))
+    fix = f"make it yours alone (chmod -R go-w {root}), or " if inside else ""
+    return f"running without it; {fix}set MUTUAL_CACHE_DIR to a folder of your own; clearing it is safe: rm -rf {root}"
 
 
 def _private_group(st):
@@ -128,6 +133,13 @@ def insecure(folder):
     """Why ``folder`` cannot be trusted as a cache, or None. It and every folder above it must be owned by this
     user or root; the folder must be writable by no one else (its group only when that is this user's private
     group), and a folder above it likewise unless it is sticky (``/tmp``: others cannot move our folder away)."""
+    found = _untrusted(folder)
+    return found[1] if found else None
+
+
+def _untrusted(folder):
+    """``(path, reason)`` of the first folder at or above ``folder`` (resolved) that :func:`insecure` faults,
+    or None."""
     me = os.geteuid()
     path = Path(os.path.realpath(folder))
     for at in [path, *path.parents]:
@@ -136,12 +148,12 @@ def insecure(folder):
         except OSError:
             continue                                  # not made yet: checked when it is
         if st.st_uid not in (me, 0):
-            return f"{at} is owned by user id {st.st_uid}, not by you: its owner could change what the cache holds"
+            return at, f"{at} is owned by user id {st.st_uid}, not by you: its owner could change what the cache holds"
         others = st.st_mode & 0o002 or (st.st_mode & 0o020 and not _private_group(st))
         if others and not (at != path and st.st_mode & stat.S_ISVTX):
             who = "anyone" if st.st_mode & 0o002 else "its group"
-            return (f"{at} can be written by {who} (mode {stat.S_IMODE(st.st_mode):o}): whoever can write there could "
-                    "change what the cache holds")
+            return at, (f"{at} can be written by {who} (mode {stat.S_IMODE(st.st_mode):o}): whoever can write there "
+                        "could change what the cache holds")
     return None
 
 

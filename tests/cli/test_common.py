@@ -83,3 +83,14 @@ def test_every_command_writes_through_the_output_set():
         source = (Path(common.__file__).parent / f"{name}.py").read_text()
         assert "output_set(args)" in source, name
         assert "write_csv(" not in source and "save_figure(" not in source and "to_csv(" not in source, name
+
+
+@pytest.mark.parametrize("category, one_line", [("InputWarning", True), ("CacheWarning", True),
+                                                ("RuntimeWarning", False)])
+def test_input_and_cache_warnings_are_one_line_naming_the_command(capsys, category, one_line):
+    from mutual.cache import CacheWarning
+    from mutual.inputs import InputWarning
+    kind = {"InputWarning": InputWarning, "CacheWarning": CacheWarning, "RuntimeWarning": RuntimeWarning}[category]
+    common._show_warning("mutual x")("the cache in /c cannot be used", kind, "file.py", 7, line="source line")
+    err = capsys.readouterr().err
+    assert (err == "mutual x: warning: the cache in /c cannot be used\n") == one_line, err

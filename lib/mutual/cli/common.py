@@ -363,9 +363,10 @@ def _terminate_cleanly():
 
 
 def _show_warning(prog):
-    """Warnings about the input (:class:`mutual.inputs.InputWarning`) as one line ``PROG: warning: ...`` on stderr."""
+    """Warnings about the input (:class:`mutual.inputs.InputWarning`) and the caches
+    (:class:`mutual.cache.CacheWarning`) as one line ``PROG: warning: ...`` on stderr."""
     def show(message, category, filename, lineno, file=None, line=None):
-        if category.__name__ == "InputWarning":
+        if category.__name__ in ("InputWarning", "CacheWarning"):
             print(f"{prog}: warning: {message}", file=sys.stderr)
         else:
             print(warnings.formatwarning(message, category, filename, lineno, line).rstrip(), file=sys.stderr)
