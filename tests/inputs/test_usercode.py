@@ -12,8 +12,8 @@ import pytest
 from mutual.inputs import call, load_function
 
 MODULES = [  # (case, module source, function name, phrases of the error at import or at the call)
-    ("sys.exit(0) at import", "import sys\nsys.exit(0)\n", "f", ["importing module", "called sys.exit(0)"]),
-    ("sys.exit('bye') at import", "import sys\nsys.exit('bye')\n", "f", ["called sys.exit('bye')"]),
+    ("sys.exit(0) at import", "import sys\nsys.exit(0)\n", "f", ["importing module", "called sys.exit(0) at line 2 of"]),
+    ("sys.exit('bye') at import", "import sys\nsys.exit('bye')\n", "f", ["called sys.exit('bye') at line 2 of"]),
     ("a raise at import", "x = 1\nraise RuntimeError('no licence')\n", "f",
      ["importing module", "raised RuntimeError: no licence at line 2 of"]),
     ("a syntax error", "def f(x, u):\n    return x +\n", "f", ["raised SyntaxError"]),
@@ -22,7 +22,7 @@ MODULES = [  # (case, module source, function name, phrases of the error at impo
     ("not a function", "f = 3\n", "f", ["has no function 'f'"]),
     ("a raise in the call", "def f(x, u):\n    y = 1\n    return [][y]\n", "f",
      ["raised IndexError: list index out of range at line 3 of"]),
-    ("sys.exit in the call", "import sys\ndef f(x, u):\n    sys.exit(3)\n", "f", ["called sys.exit(3)"]),
+    ("sys.exit in the call", "import sys\ndef f(x, u):\n    sys.exit(3)\n", "f", ["called sys.exit(3) at line 3 of"]),
 ]
 
 

@@ -47,10 +47,10 @@ def _local_file(folder, module):
 
 def _failure(err, file):
     """``ExceptionType: message (line L of FILE)`` for an exception raised by the user's code."""
-    if isinstance(err, SystemExit):
-        return f"called sys.exit({err.code!r})"
     lines = [f.lineno for f in traceback.extract_tb(err.__traceback__) if file and Path(f.filename) == Path(file)]
     at = f" at line {lines[-1]} of {file}" if lines else ""
+    if isinstance(err, SystemExit):
+        return f"called sys.exit({err.code!r}){at}"
     text = " ".join(str(err).split()) or "(no message)"
     return f"raised {type(err).__name__}: {text[:300]}{at}"
 
