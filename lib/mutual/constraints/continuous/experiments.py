@@ -5,8 +5,9 @@
 * :func:`demos_sweep` -- boundary error against the number of demonstrations (several draws);
 * :func:`robustness` -- one row per hyperparameter variant (resolution, time step, control set,
   temperature, scheme, samples, thresholds);
-* :func:`seeded_recordings`, :func:`seeded_mppi`, :func:`seeded_runs`, :func:`claim_verdict` -- a claim checked over seeds and settings against the truth
-  and the naive bound (the tightest bound the recordings allow), with a verdict by CLAIMS.md's rules;
+* :func:`seeded_recordings`, :func:`seeded_mppi`, :func:`inside_box`, :func:`seeded_runs`, :func:`claim_verdict`
+  -- a claim checked over seeds and settings against the truth and the naive bound (the tightest bound the
+  recordings allow), with a verdict by CLAIMS.md's rules;
 * :func:`measured` -- a run's wall time and peak memory in a fresh process (no timings reach the
   notebook's saved results: they vary from run to run).
 """
@@ -198,11 +199,25 @@ def seeded_recordings(demonstrator, noise=0.0, *, start, spread, n, record_every
                              record_every=record_every)
 
 
+def inside_box(recording, grid):
+    """``recording`` without the demonstrations that leave ``grid``'s box (what :func:`infer` asks a user to do
+    with such samples); how many were dropped is in ``notes["left the box"]``."""
+    keep = [d for d, states in enumerate(recording.states) if not grid.outside(states).any()]
+
+    def pick(parts):
+        return None if parts is None else tuple(parts[d] for d in keep)
+    return replace(recording, ids=pick(recording.ids), times=pick(recording.times), states=pick(recording.states),
+                   controls=pick(recording.controls), lines=pick(recording.lines),
+                   notes={**recording.notes, "left the box": len(recording) - len(keep)})
+
+
 def seeded_mppi(problem, hidden, *, start, spread, n, **options):
     """``make_recording`` for :func:`seeded_runs`: seed ``s`` -> ``n`` MPPI demonstrations
     (:func:`~.demonstrators.mppi_rollouts` with ``options``) from starts drawn around ``start`` +- ``spread``
-    with seed ``s``, the planner seeded ``s + 1``."""
-    return lambda s: mppi_rollouts(problem, hidden, starts_around(start, spread, n, s), s + 1, **options)
+    with seed ``s``, the planner seeded ``s + 1``; a demonstration the planner lets leave the problem's box
+    (a cart-pole that tips past the box's angle) is dropped (:func:`inside_box`)."""
+    return lambda s: inside_box(mppi_rollouts(problem, hidden, starts_around(start, spread, n, s), s + 1, **options),
+                                problem.grid)
 
 
 def seeded_runs(problem, make_recording, seeds, truth, setting="", **options):
@@ -210,7 +225,8 @@ def seeded_runs(problem, make_recording, seeds, truth, setting="", **options):
     rows = []
     for seed in seeds:
         recording = make_recording(seed)
-        rows.append({"setting": setting, "seed": seed, **judged(infer(problem, recording, **options), recording, truth)})
+        rows.append({"setting": setting, "seed": seed, "demonstrations": len(recording),
+                     **judged(infer(problem, recording, **options), recording, truth)})
     return pd.DataFrame(rows)
 
 
