@@ -17,31 +17,33 @@ ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "data" / "examples"
 SCRIPT = Path(sys.executable).with_name("mutual")
 
-DOUBLE_INTEGRATOR = """\
+def double_integrator(low=-1.5, high=1.5, cells=15, dt=0.2, horizon=20, reward="", simulate=""):
+    """A double-integrator system file heading for (1, 0) with the hidden wall velocity <= 0.5 in
+    ``[simulate]``: the square box [low, high]^2 in ``cells`` x ``cells``, controls -1, 0, 1; ``reward``
+    and ``simulate`` are extra lines of those tables."""
+    return f"""\
 system = "double_integrator"
 [state]
-low = [-1.5, -1.5]
-high = [1.5, 1.5]
-cells = [15, 15]
+low = [{low}, {low}]
+high = [{high}, {high}]
+cells = [{cells}, {cells}]
 [control]
 values = [-1.0, 0.0, 1.0]
 [time]
-dt = 0.2
-horizon = 20
+dt = {dt}
+horizon = {horizon}
 [reward]
 goal = [1.0, 0.0]
 state_weights = [1.0, 0.1]
-control_weights = [0.05]
-terminal_weights = [5.0, 1.0]
-temperature = 0.5
-[simulate]
+{reward}[simulate]
 hidden = ["velocity <= 0.5"]
 start = [-1.0, 0.0]
-spread = [0.1, 0.0]
-n = 20
-fine_cells = [45, 45]
-record_every = 2
-"""
+{simulate}"""
+
+
+DOUBLE_INTEGRATOR = double_integrator(
+    reward="control_weights = [0.05]\nterminal_weights = [5.0, 1.0]\ntemperature = 0.5\n",
+    simulate="spread = [0.1, 0.0]\nn = 20\nfine_cells = [45, 45]\nrecord_every = 2\n")
 
 
 def run_json(capsys, *argv):
@@ -92,37 +94,20 @@ def test_simulate_then_infer_finds_the_hidden_limit_of_a_fresh_recording(tmp_pat
     assert out["n_demonstrations"] == 20 and out["steps"] == 20
 
 
-LEAVES_THE_BOX = """\
-system = "double_integrator"
-[state]
-low = [-2.0, -2.0]
-high = [2.0, 2.0]
-cells = [21, 21]
-[control]
-values = [-1.0, 0.0, 1.0]
-[time]
-dt = 0.1
-horizon = 30
-[reward]
-goal = [1.0, 0.0]
-state_weights = [1.0, 0.1]
-[simulate]
-hidden = ["velocity <= 0.5"]
-start = [-1.0, 0.0]
-n = 15
-"""
+#: a demonstrator that backs over the box's edge at -2
+LEAVES_THE_BOX = dict(low=-2.0, high=2.0, cells=21, dt=0.1, horizon=30, simulate="n = 15\n")
 
 
 def test_simulate_refuses_demonstrations_that_leave_the_box_before_writing(tmp_path, capsys):
     """A demonstrator that backs over the box's edge (position -2.01 of [-2, 2]) would write a file that
     infer-continuous refuses: simulate says so, names the coordinate, and writes nothing."""
-    (tmp_path / "di.toml").write_text(LEAVES_THE_BOX)
+    (tmp_path / "di.toml").write_text(double_integrator(**LEAVES_THE_BOX))
     assert main(["constraints", "simulate", "--system", str(tmp_path / "di.toml"), "--out", str(tmp_path / "sim"),
                  "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "leave the box" in err and "'position' reaches -2.01" in err and "widen [state] low/high" in err
     assert not (tmp_path / "sim").exists()
-    (tmp_path / "wide.toml").write_text(LEAVES_THE_BOX.replace("[-2.0, -2.0]", "[-2.5, -2.5]"))
+    (tmp_path / "wide.toml").write_text(double_integrator(**{**LEAVES_THE_BOX, "low": -2.5}))
     run_json(capsys, "constraints", "simulate", "--system", tmp_path / "wide.toml", "--out", tmp_path / "sim")
     out = run_json(capsys, "constraints", "infer-continuous", tmp_path / "sim" / "trajectories.csv", "--system",
                    tmp_path / "wide.toml", "--rounds", "1", "--out", tmp_path / "inferred")

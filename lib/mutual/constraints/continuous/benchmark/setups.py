@@ -15,9 +15,9 @@ Truths per system (the text form of :func:`mutual.constraints.continuous.parse_r
 * ``"U"`` -- none: unconstrained recordings, on which every accepted constraint is a false positive.
 """
 
-import tomllib
 from dataclasses import dataclass
 
+from ....inputs import parse_toml
 from ..regions import parse_region
 from ..systemfile import system_from_mapping
 
@@ -123,7 +123,8 @@ class Setup:
 
     def system_file(self):
         """The :class:`~mutual.constraints.continuous.systemfile.SystemFile` the text describes."""
-        return system_from_mapping(tomllib.loads(self.text), f"<benchmark {self.name}.toml>")
+        source = f"<benchmark {self.name}.toml>"
+        return system_from_mapping(parse_toml(self.text, source), source)
 
     def truth(self, key):
         """The hidden regions of truth ``key`` (an empty list for "U")."""
