@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import jax  # noqa: F401 (imported here, so use_persistent_cache says at once why the cache is off)
 import pytest
 
 from mutual import jax_cache
@@ -122,3 +123,31 @@ def test_a_jax_cache_folder_of_ones_own_that_others_may_write_is_refused(tmp_pat
     with pytest.warns(RuntimeWarning, match="can be written by anyone.*JAX's compilation cache is off"):
         jax_cache.use_persistent_cache(env)
     assert env == {}
+
+
+# a user script, then a command whose handler imports JAX, each in a fresh process with a cache folder others may write
+IMPORTS = "import mutual\nprint('imported', flush=True)\nimport jax\n"
+COMMAND = """import argparse, sys
+from mutual.cli import common
+sys.exit(common.run(argparse.Namespace(handler=lambda args: __import__("jax")), "mutual"))
+"""
+
+
+@pytest.mark.parametrize("program, expected", [
+    (IMPORTS, "{script}:3: CacheWarning: the cache in {folder} cannot be used"),    # the line that imports JAX
+    (COMMAND, "mutual: warning: the cache in {folder} cannot be used"),           # the command line's one line
+])
+def test_why_the_jax_cache_is_off_is_said_once_when_jax_is_imported(tmp_path, program, expected):
+    """Importing mutual alone says nothing (a command that never compiles has no use for the cache); the
+    reason comes when JAX is imported, in Python's form for a script and in the command line's own
+    one-line form, and only once."""
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    script = tmp_path / "script.py"
+    script.write_text(program)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         env=_env(MUTUAL_CACHE_DIR=str(shared)), check=True)
+    first = expected.format(script=script, folder=shared / jax_cache.FOLDER)
+    assert out.stderr.startswith(first) and out.stderr.count("cannot be used") == 1, out.stderr
+    assert "can be written by anyone" in out.stderr and "rm -rf" in out.stderr

@@ -52,14 +52,15 @@ def cache_dir() -> Path:
         raise FileNotFoundError("no home folder to put the cache in (set MUTUAL_CACHE_DIR)") from None
 
 
-def unusable(where, err, doing="running without it"):
-    """Say once per ``where`` (a cache folder) that its cache cannot be used, and why."""
+def unusable(where, err, doing="running without it", stacklevel=3):
+    """Say once per ``where`` (a cache folder) that its cache cannot be used, and why (the warning points
+    ``stacklevel`` frames up, as :func:`warnings.warn` counts them from here)."""
     where = str(where)
     if where in _WARNED:
         return
     _WARNED.add(where)
     reason = f"{type(err).__name__}: {err}" if isinstance(err, BaseException) else str(err)
-    warnings.warn(f"the cache in {where} cannot be used ({reason}); {doing}", CacheWarning, stacklevel=3)
+    warnings.warn(f"the cache in {where} cannot be used ({reason}); {doing}", CacheWarning, stacklevel=stacklevel)
 
 
 def cache_folder(name, writable=True):

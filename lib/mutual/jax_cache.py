@@ -12,7 +12,8 @@ compiles anew; the folder holds serialised XLA executables, never Python objects
 Nothing is imported and no folder is created here: the settings go into the environment
 (``JAX_COMPILATION_CACHE_DIR``, read by JAX when it is imported), or into ``jax.config`` when JAX
 was imported before :mod:`mutual`. A cache folder of your own (``JAX_COMPILATION_CACHE_DIR``)
-wins, and an unwritable cache folder leaves the cache off (a warning once), never stops a run.
+wins, and an unwritable cache folder leaves the cache off (a warning once, when JAX is imported), never
+stops a run.
 
 JAX runs what it loads from its cache as machine code, and its own cache has no authentication (JAX's
 documentation: sharing the cache is letting anyone who may write it run code as you). So, as for every
@@ -55,12 +56,14 @@ def _writable(folder):
 
 def use_persistent_cache(environ=os.environ):
     """Turn JAX's persistent compilation cache on in ``<cache folder>/jax-signed``, with authenticated entries (see
-    the module); refuse a folder, ours or yours, that others may write."""
+    the module); refuse a folder, ours or yours, that others may write. Why the cache is off is said when JAX
+    is imported (at once if it was already), so a command that never compiles says nothing and the command
+    line shows it in its own one-line form."""
     own = environ.get("JAX_COMPILATION_CACHE_DIR")
     if own:
         reason = insecure(own)
         if reason:
-            unusable(own, reason, f"JAX's compilation cache is off; make {own} yours alone (chmod -R go-w {own}) "
+            _when_jax_loads(own, reason, f"JAX's compilation cache is off; make {own} yours alone (chmod -R go-w {own}) "
                                   f"or unset JAX_COMPILATION_CACHE_DIR; clearing it is safe: rm -rf {own}")
             environ.pop("JAX_COMPILATION_CACHE_DIR")
             if "jax" in sys.modules:
@@ -70,15 +73,15 @@ def use_persistent_cache(environ=os.environ):
     try:
         folder = cache_dir() / FOLDER
     except OSError as err:
-        unusable("the cache folder", err, "JAX's compilation cache is off")
+        _when_jax_loads("the cache folder", err, "JAX's compilation cache is off")
         return
     if not _writable(folder):
-        unusable(folder, f"{folder} is not writable", "JAX's compilation cache is off (set MUTUAL_CACHE_DIR to a "
+        _when_jax_loads(folder, f"{folder} is not writable", "JAX's compilation cache is off (set MUTUAL_CACHE_DIR to a "
                  "writable folder to keep compiled programs between runs)")
         return
     reason = insecure(folder)
     if reason:
-        unusable(folder, reason, "JAX's compilation cache is off; " + advice(folder).removeprefix("running without it; "))
+        _when_jax_loads(folder, reason, "JAX's compilation cache is off; " + advice(folder).removeprefix("running without it; "))
         return
     authenticate_entries(folder)
     values = {"jax_compilation_cache_dir": str(folder), "jax_persistent_cache_min_compile_time_secs":
@@ -90,6 +93,28 @@ def use_persistent_cache(environ=os.environ):
         jax.config.update("jax_compilation_cache_dir", values["jax_compilation_cache_dir"])
         jax.config.update("jax_persistent_cache_min_compile_time_secs",
                           float(values["jax_persistent_cache_min_compile_time_secs"]))
+
+
+def _when_jax_loads(where, reason, doing):
+    """:func:`mutual.cache.unusable` now if JAX is imported, else the moment it is."""
+    if "jax" in sys.modules:
+        unusable(where, reason, doing)
+    else:
+        sys.meta_path.insert(0, _SayOnImport(lambda level: unusable(where, reason, doing, level)))
+
+
+class _SayOnImport(importlib.abc.MetaPathFinder):
+    """Calls ``say(stacklevel)`` once, when ``jax`` starts being imported, with the stack level of the line
+    that imports it, and lets the import go on."""
+
+    def __init__(self, say):
+        self.say = say
+
+    def find_spec(self, name, path, target=None):
+        if name == "jax":
+            sys.meta_path.remove(self)
+            self.say(4)  # warnings.warn counts unusable 1, say 2, here 3, then skips the import machinery
+        return None
 
 
 TARGET = "jax._src.compilation_cache"
