@@ -65,19 +65,29 @@ def _header(r):
             f"{r['n_controls']} controls, {r['scheme']} scheme, model {r['model']!r}")
 
 
+def _rankings(rankings, width, columns, flag, after_round):
+    """Each round's ranking as text lines: rank, the constraint in ``width`` characters, then ``columns``
+    (heading, key, width, format), and ``  <- flag`` on the row whose ``flag`` is set; ``after_round(i)``
+    follows the round's heading."""
+    lines = []
+    for i, ranking in enumerate(rankings, start=1):
+        lines.append(f"round {i}{after_round(i)}")
+        lines.append(f"  {'rank':>4}  {'constraint':<{width}}" + "".join(f"{h:>{w}}" for h, _, w, _ in columns))
+        for row in ranking:
+            mark = f"  <- {flag}" if row[flag] else ""
+            lines.append(f"  {row['rank']:>4}  {row['constraint'][:width - 1]:<{width}}"
+                         + "".join(f"{row[key]:>{w}{fmt}}" for _, key, w, fmt in columns) + mark)
+        lines.append("")
+    return lines
+
+
 def _summary_points(r):
     lines = [_header(r), "Reward weights per round (maximum likelihood unless fixed; running q per coordinate, "
                          "c per control, terminal Q per coordinate, in the file's units divided by the temperature):"]
     lines += [f"  round {i}: " + ", ".join(f"{k} = [{', '.join(f'{v:.3g}' for v in vals)}]" for k, vals in w.items())
               for i, w in enumerate(r["weights"], start=1)] + [""]
-    for i, ranking in enumerate(r["ranking"], start=1):
-        lines.append(f"round {i}")
-        lines.append(f"  {'rank':>4}  {'constraint':<52}{'gain':>10}{'per demo':>10}{'F':>8}")
-        for row in ranking:
-            mark = "  <- accepted" if row["accepted"] else ""
-            lines.append(f"  {row['rank']:>4}  {row['constraint'][:51]:<52}{row['gain']:>10.3f}"
-                         f"{row['gain_per_demo']:>10.3f}{row['F']:>8.3f}{mark}")
-        lines.append("")
+    lines += _rankings(r["ranking"], 52, [("gain", "gain", 10, ".3f"), ("per demo", "gain_per_demo", 10, ".3f"),
+                                          ("F", "F", 8, ".3f")], "accepted", lambda i: "")
     why = {"rounds": f"--rounds {r['rounds']} reached", "no candidate": "no candidate left",
            "min_gain": "the best candidate gains too little"}[r["stopped"]]
     lines.append(f"Stopped: {why}. Accepted constraints ({len(r['chosen'])}):")
@@ -101,14 +111,9 @@ def _summary_points(r):
 def _summary_cells(r, notes):
     lines = [_header(r), f"Mapping: {notes}", f"{r['n_candidates']} candidates ({r['thresholds']} thresholds; "
                                               f"{r['thresholds_raised_by_lemma']} raised above eq. 3.3)", ""]
-    for i, ranking in enumerate(r["ranking"], start=1):
-        lines.append(f"round {i}" + ("" if i <= len(r["chosen"]) else "  (not accepted: stop rule)"))
-        lines.append(f"  {'rank':>4}  {'constraint':<46}{'psi':>7}{'F':>11}{'-log F':>9}{'exact gain':>12}")
-        for row in ranking:
-            mark = "  <- chosen" if row["chosen"] else ""
-            lines.append(f"  {row['rank']:>4}  {row['constraint'][:45]:<46}{row['psi']:>7.3f}{row['F']:>11.4g}"
-                         f"{row['neg_log_F']:>9.4f}{row['exact_gain']:>12.4f}{mark}")
-        lines.append("")
+    lines += _rankings(r["ranking"], 46, [("psi", "psi", 7, ".3f"), ("F", "F", 11, ".4g"), ("-log F", "neg_log_F", 9, ".4f"),
+                                          ("exact gain", "exact_gain", 12, ".4f")], "chosen",
+                       lambda i: "" if i <= len(r["chosen"]) else "  (not accepted: stop rule)")
     why = {"rounds": f"--rounds {r['rounds']} reached",
            "min_gain": "the best remaining constraint gains less than --min-gain nats per demonstration",
            "no feasible candidate": "no feasible candidate left"}[r["stopped"]]
