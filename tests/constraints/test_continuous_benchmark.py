@@ -140,3 +140,47 @@ def test_quick_benchmark_runs_every_method_and_the_command_line_agrees_with_the_
     assert pendulum["inference: chosen"] == ("; ".join(
         f"{('theta', 'theta_dot')[r.dim]} {'<=' if r.side == 'upper' else '>='} {r.value:.3f}" for r in api.regions)
         or "none")
+
+
+def _ring(center, radius, n=720):
+    angle = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return np.c_[center[0] + radius * np.cos(angle), center[1] + radius * np.sin(angle)]
+
+
+def test_a_disk_passed_on_two_sides_slides_along_the_lane_and_a_ringed_disk_cannot_move():
+    """Closed forms: points on the lines y = +-(r + g) for x in [-3, 3] let the disk of radius r move
+    anywhere along x within the lattice (|dx| <= reach) but only |dy| <= g across; a ring of radius r + g
+    around it lets it move at most g in any direction."""
+    from mutual.constraints.continuous.benchmark import centre_slack
+    from mutual.constraints.continuous.benchmark.identifiability import indistinguishable_moves
+    truth, g = Disk((0, 1), (0.0, 0.0), 0.8), 0.05
+    x = np.linspace(-3.0, 3.0, 6001)
+    lanes = np.r_[np.c_[x, np.full_like(x, 0.8 + g)], np.c_[x, np.full_like(x, -0.8 - g)]]
+    farthest, spans, at_reach = centre_slack(truth, lanes, reach=0.5, step=0.01)
+    assert at_reach and spans[0] == pytest.approx(1.0) and spans[1] == pytest.approx(2 * g, abs=0.011)
+    assert farthest == pytest.approx(math.hypot(0.5, g), abs=0.011)
+    farthest, spans, at_reach = centre_slack(truth, _ring((0.0, 0.0), 0.8 + g), reach=0.5, step=0.01)
+    assert not at_reach and g - 0.011 <= farthest <= g + 1e-9
+    moves = indistinguishable_moves(truth, _ring((0.0, 0.0), 0.8 + g), reach=0.5, step=0.01)
+    assert np.all(Disk((0, 1), (0.0, 0.0), g + 1e-9).inside(moves))     # brute force: every move within g
+
+
+def test_a_box_seen_from_one_side_sinks_away_from_it_and_points_inside_rule_moves_out():
+    """Closed forms: one lane 0.05 above the box's top lets it move along the lane and down as far as the
+    lattice goes, and up by 0.05 only; a point inside the box rules the box as it is out; points
+    everywhere leave no move (nan)."""
+    from mutual.constraints.continuous.benchmark import centre_slack
+    from mutual.constraints.continuous.benchmark.identifiability import indistinguishable_moves
+    box = Box((0, 1), (-0.4, -1.2), (0.6, 0.4))
+    x = np.linspace(-3.0, 3.0, 601)
+    above = np.c_[x, np.full_like(x, 0.45)]
+    moves = indistinguishable_moves(box, above, reach=0.5, step=0.05)
+    assert moves[:, 1].max() == pytest.approx(0.05) and moves[:, 1].min() == pytest.approx(-0.5)
+    assert np.ptp(moves[:, 0]) == pytest.approx(1.0)
+    moves = indistinguishable_moves(box, np.r_[above, [[0.0, 0.0]]], reach=0.5, step=0.05)
+    assert len(moves) and not np.any(np.all(np.abs(moves) < 1e-12, axis=1))
+    grid = np.stack(np.meshgrid(np.linspace(-3, 3, 121), np.linspace(-3, 3, 121)), axis=-1).reshape(-1, 2)
+    farthest, spans, at_reach = centre_slack(box, grid, reach=0.5, step=0.05)
+    assert math.isnan(farthest) and np.isnan(spans).all() and not at_reach
+    with pytest.raises(ValueError, match="truth: must be a Disk or a Box"):
+        centre_slack(Bound(0, "upper", 1.0), above)

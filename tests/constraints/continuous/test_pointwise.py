@@ -98,6 +98,29 @@ def test_on_a_lattice_system_the_likelihood_and_the_gain_of_a_bound_equal_enumer
     assert gain == pytest.approx(truth_ll["bound"] - truth_ll["free"], abs=1e-8)
 
 
+
+@pytest.mark.parametrize("keep_bytes", [pw.KEEP_BYTES, 0])
+def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_successors_or_not(keep_bytes, monkeypatch):
+    """Eq. 2.8's gradient (expected less demonstrated features) against central differences of the exact
+    log-likelihood, under a bound, with log Z at the successors kept from the value (barycentric) or
+    recomputed (KEEP_BYTES = 0): the same to rounding."""
+    monkeypatch.setattr(pw, "KEEP_BYTES", keep_bytes)
+    p = integrator_1d()
+    states, controls, returns = enumerate_paths(p, [0.0], p.horizon)
+    prob = np.where((states[:, :, 0] <= 0.6).all(axis=1), np.exp(returns - returns.max()), 0.0)
+    picks = np.random.default_rng(2).choice(len(returns), size=4, p=prob / prob.sum())
+    data = ev.demonstrated(p, recording(states[picks], controls[picks], p.dt))
+    model, regions = pw.point_model(p), [Bound(0, "upper", 0.6)]
+    w = pw.file_weights(p) * np.array([1.0, 0.7, 1.3])
+    successors = []
+    ll, logZ = ev.log_likelihood(model, data, regions, w, successors)
+    assert len(successors) == (p.horizon if keep_bytes else 0)
+    grad = ev.log_likelihood_gradient(model, data, regions, w, logZ, successors)
+    h = 1e-6
+    numeric = [(ev.log_likelihood(model, data, regions, w + h * e)[0] - ev.log_likelihood(model, data, regions, w - h * e)[0]) / (2 * h)
+               for e in np.eye(w.size)]
+    np.testing.assert_allclose(grad, numeric, rtol=1e-6, atol=1e-8)
+
 def test_among_consistent_bounds_the_tightest_is_the_most_likely_by_enumeration():
     """Lemma 3.2.1's argument for a family of bounds: the enumerated gain falls as the bound loosens."""
     p = integrator_1d(horizon=5)

@@ -89,13 +89,13 @@ def _demonstrated_rewards(model, data, weights):
     return -(data.features @ np.asarray(weights))
 
 
-def log_likelihood(model, data, regions, weights):
+def log_likelihood(model, data, regions, weights, successors=None):
     """``(ll, logZ)``: the demonstrations' exact log-likelihood under ``regions`` with ``weights`` (a
     temperature, or per-feature weights: :func:`.pointwise.move_rewards`) (module docstring; -inf if one of
-    them enters a region) and log Z_{C,t} on the cells."""
+    them enters a region) and log Z_{C,t} on the cells (``successors``: see :func:`.pointwise.log_partition`)."""
     if any(r.inside(data.samples).any() for r in regions):
         return -math.inf, None
-    logZ = pw.log_partition(model, regions, weights)
+    logZ = pw.log_partition(model, regions, weights, successors)
     cell_ok = pw.points_allowed(model, regions).any(axis=1)
     z0 = pw.point_log_values(data.starts, logZ[1], pw.allowed_moves(regions, data.starts), cell_ok, weights)
     zL = 0.0
@@ -104,12 +104,12 @@ def log_likelihood(model, data, regions, weights):
     return float(np.sum(_demonstrated_rewards(model, data, weights) + zL - z0)), logZ
 
 
-def log_likelihood_gradient(model, data, regions, weights, logZ):
+def log_likelihood_gradient(model, data, regions, weights, logZ, successors=None):
     """d ll / d weights (2d + m,) for per-feature weights: the model's expected features from the starts,
     less those from the ends (prefixes), less the demonstrations' own (Ziebart's eq. 2.8)."""
-    grad = pw.expected_features(model, data.starts, 0, logZ, regions, weights) - data.features.sum(axis=0)
+    grad = pw.expected_features(model, data.starts, 0, logZ, regions, weights, successors) - data.features.sum(axis=0)
     if data.ends is not None:
-        grad -= pw.expected_features(model, data.ends, data.steps, logZ, regions, weights)
+        grad -= pw.expected_features(model, data.ends, data.steps, logZ, regions, weights, successors)
     return grad
 
 
@@ -167,12 +167,12 @@ def fit_weights(model, data, regions, start, reference, iterations=40, cap=TEMPE
     cache = {}
 
     def negative(z):
-        w = scale * z
-        ll, logZ = log_likelihood(model, data, regions, w)
+        w, successors = scale * z, []
+        ll, logZ = log_likelihood(model, data, regions, w, successors)
         cache[z.tobytes()] = (ll, logZ)
         if not np.isfinite(ll):
             return 1e300, np.zeros_like(z)
-        return -ll, -scale * log_likelihood_gradient(model, data, regions, w, logZ)
+        return -ll, -scale * log_likelihood_gradient(model, data, regions, w, logZ, successors)
 
     best = minimize(negative, np.clip(np.asarray(start, dtype=float) / scale, 0.0, cap), jac=True, method="L-BFGS-B",
                     bounds=[(0.0, cap)] * start.size, options={"maxiter": iterations, "ftol": 1e-7, "gtol": 1e-5})

@@ -44,6 +44,7 @@ from ... import budget
 from .discretization import kuhn_weights
 
 SEGMENT_POINTS = 3      # interior points at which a move's straight segment is checked against obstacles
+KEEP_BYTES = 2 ** 28   # at most this much of log Z at the successors is kept between the value and its gradient
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,27 +211,45 @@ def points_allowed(model, regions):
     return ok.reshape(model.points.shape[:2])
 
 
-def successor_log_values(moves, logZ_next, cell_ok):
+def successor_mass(moves, cell_ok):
+    """The interpolation weight (P,) on each successor's allowed vertices (barycentric), or None (sample
+    scheme): what :func:`successor_log_values` renormalizes by, the same at every time step."""
+    if moves.target.shape[1] == 1:
+        return None
+    return (np.exp(moves.log_weight) * cell_ok[moves.target]).sum(axis=1)
+
+
+def successor_log_values(moves, logZ_next, cell_ok, mass=None):
     """log Z_{t+1} at every move's successor (P,): its cell's value (sample scheme), or the interpolation
     over the allowed vertices with their weights renormalized (barycentric); ``cell_ok`` (X,): cells with
-    an allowed point."""
+    an allowed point; ``mass``: :func:`successor_mass`, if computed already."""
     if moves.target.shape[1] == 1:
         return logZ_next[moves.target[:, 0]]
     value = _logsumexp(moves.log_weight + logZ_next[moves.target], axis=1)
-    mass = (np.exp(moves.log_weight) * cell_ok[moves.target]).sum(axis=1)
+    mass = successor_mass(moves, cell_ok) if mass is None else mass
     return np.where(mass > 0, value - _log(np.maximum(mass, 1e-300)), -np.inf)
 
 
-def log_partition(model, regions=(), weights=1.0):
-    """log Z_{C,t} (T+1, X) on the cells for the constraint set ``regions`` (module docstring)."""
+def log_partition(model, regions=(), weights=1.0, successors=None):
+    """log Z_{C,t} (T+1, X) on the cells for the constraint set ``regions`` (module docstring). On the
+    barycentric scheme a list ``successors`` receives, at index t, the successors' log Z_{t+1}
+    (:func:`successor_log_values`, an interpolation worth keeping when they fit in ``KEEP_BYTES``), for
+    :func:`expected_features` to reuse."""
     mv = model.moves
     ok = points_allowed(model, regions)
     n_ok, cell_ok = ok.sum(axis=1), ok.any(axis=1)
+    mass = successor_mass(mv, cell_ok)
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
     logZ = np.empty((model.horizon + 1, ok.shape[0]))
     logZ[-1] = _terminal(model, ok, weights)
+    keep = successors is not None and mass is not None and mv.target.shape[0] * model.horizon * 8 <= KEEP_BYTES
+    if keep:
+        successors[:] = [None] * model.horizon
     for t in range(model.horizon - 1, -1, -1):
-        q = _by_owner(mv, move_reward + successor_log_values(mv, logZ[t + 1], cell_ok))
+        at = successor_log_values(mv, logZ[t + 1], cell_ok, mass)
+        if keep:
+            successors[t] = at
+        q = _by_owner(mv, move_reward + at)
         logZ[t] = np.where(cell_ok, _logsumexp(q, axis=1) - _log(np.maximum(n_ok, 1)), -np.inf)
     return logZ
 
@@ -287,8 +306,9 @@ def satisfaction(model, logZ, regions, candidates, weights, times):
     F = np.einsum("xm,xmk->xk", share, ok_plus) * n_ratio
     out = {model.horizon: F} if model.horizon in times else {}
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
+    mass = successor_mass(mv, cell_ok)
     for t in range(model.horizon - 1, -1, -1):
-        at = successor_log_values(mv, logZ[t + 1], cell_ok)
+        at = successor_log_values(mv, logZ[t + 1], cell_ok, mass)
         q = move_reward + at
         p = _probabilities(_by_owner(mv, q), logZ[t] + _log(ok.sum(axis=1)))
         F = _weighted_sums(mv, p, extra, logZ[t + 1], at, F) * n_ratio
@@ -347,11 +367,12 @@ def _spread(moves, mass, logZ_next, at, n_cells):
     return np.bincount(moves.target.ravel(), weights=(mass[:, None] * share).ravel(), minlength=n_cells)
 
 
-def expected_features(model, moves, t0, logZ, regions, weights):
+def expected_features(model, moves, t0, logZ, regions, weights, successors=None):
     """The expected features (d + m running, then d terminal) of the futures from the points of ``moves`` at
     time ``t0`` to the horizon under ``regions``, summed over the points: Algorithm 1 on the point model (the
     first step exactly from the points, then the cells' occupancy). Their difference from the
-    demonstrations' features is the gradient of the log-likelihood in the weights."""
+    demonstrations' features is the gradient of the log-likelihood in the weights. ``successors``: what
+    :func:`log_partition` kept for this ``logZ`` (none or empty: computed here)."""
     mv, X, T = model.moves, model.points.shape[0], model.horizon
     ok = points_allowed(model, regions)
     cell_ok, n_ok = ok.any(axis=1), ok.sum(axis=1)
@@ -363,8 +384,9 @@ def expected_features(model, moves, t0, logZ, regions, weights):
     total[:run] += np.einsum("of,ofk->k", p, _by_owner(moves, moves.features))
     D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, X)
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
+    mass = None if successors else successor_mass(mv, cell_ok)
     for t in range(t0 + 1, T):
-        at = successor_log_values(mv, logZ[t + 1], cell_ok)
+        at = successors[t] if successors else successor_log_values(mv, logZ[t + 1], cell_ok, mass)
         w = D[:, None] * _probabilities(_by_owner(mv, move_reward + at), logZ[t] + _log(n_ok))
         total[:run] += np.einsum("of,ofk->k", w, _by_owner(mv, mv.features))
         D = _spread(mv, w.reshape(-1), logZ[t + 1], at, X)
