@@ -87,6 +87,19 @@ def _needed_notebooks(items):
     return stems
 
 
+def pytest_addoption(parser):
+    parser.addoption("--jax-compiles", action="store_true",
+                     help="count JAX's compilations per test file and print where the compile time went")
+
+
+def pytest_configure(config):
+    if config.getoption("--jax-compiles"):
+        from helpers.compiles import CompileCounter
+        counter = CompileCounter()
+        counter.start()
+        config.pluginmanager.register(counter, "jax-compiles")
+
+
 @pytest.hookimpl(trylast=True)  # after -k and -m have deselected what will not run
 def pytest_collection_modifyitems(session, config, items):
     """Tests that read a notebook's run go last, in the order the lane runs the notebooks, and the
