@@ -102,8 +102,8 @@ def cases(split="development", systems=None):
 
 def _source_key():
     here = Path(__file__).parent
-    text = b"".join((here / name).read_bytes() for name in ("setups.py", "controllers.py", "safety.py",
-                                                           "demonstrators.py", "cases.py"))
+    files = [here / name for name in ("setups.py", "controllers.py", "safety.py", "demonstrators.py", "cases.py")]
+    text = b"".join(f.read_bytes() for f in files + sorted((here / "systems").glob("*.toml")))
     return hashlib.sha256(text).hexdigest()[:16]
 
 
