@@ -184,3 +184,13 @@ def test_a_box_seen_from_one_side_sinks_away_from_it_and_points_inside_rule_move
     assert math.isnan(farthest) and np.isnan(spans).all() and not at_reach
     with pytest.raises(ValueError, match="truth: must be a Disk or a Box"):
         centre_slack(Bound(0, "upper", 1.0), above)
+
+
+def test_recorded_ranges_are_the_extremes_of_the_case_files_read_as_plain_csv():
+    import csv
+    from mutual.constraints.continuous.benchmark import case_csv, recorded_ranges
+    row = recorded_ranges("development", ["pendulum"]).set_index("case").loc["pendulum-B-lagged-narrow"]
+    with open(case_csv(_case("pendulum-B-lagged-narrow"))) as f:
+        speeds = [float(r["theta_dot"]) for r in csv.DictReader(f)]
+    assert row["theta_dot min"] == min(speeds) and row["theta_dot max"] == max(speeds)
+    assert row["theta_dot min"] >= -4.5 and row["truth"] == "theta_dot >= -4.5"      # the truth, ridden from above

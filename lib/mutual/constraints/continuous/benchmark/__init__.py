@@ -12,16 +12,17 @@ Systems x demonstrators x truths, on data the inference did not generate:
   allow, and the KKT method of Chou, Ozay and Berenson (2019, 2020) as a published peer;
 * :mod:`.methods`, :mod:`.scoring`, :mod:`.suite` -- each method behind one small function, one
   scorer for all, and :func:`run_benchmark`, the one call that runs a split;
-* :mod:`.identifiability` -- how far the recordings let each true obstacle move unnoticed
-  (:func:`slack_table`): a floor under any method's centre error on them.
+* :mod:`.identifiability` -- how far each true obstacle can move with no demonstrated point inside
+  (:func:`slack_table`): what where the demonstrators went leaves open; :func:`recorded_ranges`,
+  where they went.
 
 Tune on ``run_benchmark("development")``; run ``"held-out"`` only to report.
 """
 
 from .cases import Case, all_cases, case_csv, case_recording, cases
-from .identifiability import centre_slack, slack_table
+from .identifiability import centre_slack, recorded_ranges, slack_table
 from .scoring import Answer, score
 from .suite import METHODS, run_benchmark, summary_table, wins
 
-__all__ = ["METHODS", "Answer", "Case", "all_cases", "case_csv", "case_recording", "cases", "centre_slack", "run_benchmark",
-           "score", "slack_table", "summary_table", "wins"]
+__all__ = ["METHODS", "Answer", "Case", "all_cases", "case_csv", "case_recording", "cases", "centre_slack", "recorded_ranges",
+           "run_benchmark", "score", "slack_table", "summary_table", "wins"]

@@ -1,13 +1,14 @@
-"""How far the recordings pin an obstacle down: the moves of the true obstacle that no demonstration can
-tell from it.
+"""How far the recordings pin an obstacle down: the moves of the true obstacle that the demonstrated
+states cannot rule out.
 
 A demonstration says where the demonstrator went, not why it went round. Moved by ``d``, the true disk
-or box holds no demonstrated point either, so it is exactly as consistent with the recordings as the
-truth: every method that reads a constraint from the demonstrated states (the inference, the tightest
-consistent obstacle, KKT on the same states) can be off by ``|d|`` without the data saying so. The
-farthest such move, :func:`centre_slack`, is therefore a floor under a centre-error target on those
-recordings: where it exceeds the target, no method can promise the target on them. Moves are tried on
-a lattice of ``STEP`` within ``REACH`` of the truth along each axis of the obstacle's plane.
+or box may still hold no demonstrated point: it is then exactly as consistent with where the
+demonstrators went as the truth. A method that reads the obstacle from that alone (the largest empty
+obstacle, the tightest consistent bound's analogue) can be off by up to the farthest such move,
+:func:`centre_slack`, without the data saying so; a method can place it closer only by trusting a
+model of how the demonstrator steers (the inference's maximum-entropy demonstrator, KKT's local
+optimality), which hand-written demonstrators need not follow. Moves are tried on a lattice of ``STEP``
+within ``REACH`` of the truth along each axis of the obstacle's plane.
 """
 
 import math
@@ -62,7 +63,7 @@ def centre_slack(truth, points, reach=REACH, step=STEP):
 
 
 def slack_table(split="all", systems=None, reach=REACH, step=STEP):
-    """Per obstacle case of ``split``: how far its recordings let the true obstacle move unnoticed
+    """Per obstacle case of ``split``: how far the true obstacle can move with no demonstrated point inside
     (:func:`centre_slack`; "at least" where the moves reach the lattice's edge)."""
     import pandas as pd
     rows = []
@@ -74,4 +75,19 @@ def slack_table(split="all", systems=None, reach=REACH, step=STEP):
         rows.append({"case": case.id, "split": case.split, "truth": case.truth_text,
                      "farthest indistinguishable move (m)": farthest, "at least (lattice edge)": at_reach,
                      "span along x (m)": spans[0], "span along y (m)": spans[1]})
+    return pd.DataFrame(rows)
+
+
+def recorded_ranges(split="all", systems=None):
+    """Per case of ``split`` (``systems``: some of them): the smallest and largest recorded value of each
+    state coordinate, the truth and its kind: where the demonstrators went, truth by truth."""
+    import pandas as pd
+    rows = []
+    for case in cases(split, systems):
+        states = np.concatenate(case_recording(case).states)
+        names = case.setup.system_file().problem.grid.names
+        row = {"case": case.id, "split": case.split, "truth": case.truth_text}
+        for i, name in enumerate(names):
+            row[f"{name} min"], row[f"{name} max"] = float(states[:, i].min()), float(states[:, i].max())
+        rows.append(row)
     return pd.DataFrame(rows)
