@@ -104,17 +104,29 @@ def _when_jax_loads(where, reason, doing):
 
 
 class _SayOnImport(importlib.abc.MetaPathFinder):
-    """Calls ``say(stacklevel)`` once, when ``jax`` starts being imported, with the stack level of the line
-    that imports it, and lets the import go on."""
+    """Calls ``say(stacklevel)`` once, when the ``jax`` package is executed (imported, not merely looked
+    up), with the stack level of the line that imports it, and lets the import go on."""
 
     def __init__(self, say):
         self.say = say
 
     def find_spec(self, name, path, target=None):
-        if name == "jax":
-            sys.meta_path.remove(self)
-            self.say(4)  # warnings.warn counts unusable 1, say 2, here 3, then skips the import machinery
-        return None
+        if name != "jax":
+            return None
+        spec = next((s for s in (f.find_spec(name, path, target) for f in sys.meta_path
+                                 if f is not self and hasattr(f, "find_spec")) if s is not None), None)
+        if spec is None or spec.loader is None:
+            return spec
+        execute, finder = spec.loader.exec_module, self
+
+        def exec_module(module):
+            if finder in sys.meta_path:
+                sys.meta_path.remove(finder)
+                finder.say(4)  # warnings.warn counts unusable 1, say 2, here 3, then skips the import machinery
+            execute(module)
+
+        spec.loader.exec_module = exec_module
+        return spec
 
 
 TARGET = "jax._src.compilation_cache"

@@ -148,9 +148,9 @@ def _ring(center, radius, n=720):
 
 
 def test_a_disk_passed_on_two_sides_slides_along_the_lane_and_a_ringed_disk_cannot_move():
-    """Closed forms: points on the lines y = +-(r + g) for x in [-3, 3] let the disk of radius r move
-    anywhere along x within the lattice (|dx| <= reach) but only |dy| <= g across; a ring of radius r + g
-    around it lets it move at most g in any direction."""
+    """Closed forms: points on the lines y = +-(r + g) for x in [-3, 3] let the disk of radius r slide
+    anywhere along x within the lattice (|dx| <= reach) but only |dy| <= g across (positions past a lane
+    are free too, but it cannot slide there); a ring of radius r + g around it lets it slide at most g."""
     from mutual.constraints.continuous.benchmark import centre_slack
     from mutual.constraints.continuous.benchmark.identifiability import indistinguishable_moves
     truth, g = Disk((0, 1), (0.0, 0.0), 0.8), 0.05
@@ -163,12 +163,16 @@ def test_a_disk_passed_on_two_sides_slides_along_the_lane_and_a_ringed_disk_cann
     assert not at_reach and g - 0.011 <= farthest <= g + 1e-9
     moves = indistinguishable_moves(truth, _ring((0.0, 0.0), 0.8 + g), reach=0.5, step=0.01)
     assert np.all(Disk((0, 1), (0.0, 0.0), g + 1e-9).inside(moves))     # brute force: every move within g
+    beyond = indistinguishable_moves(truth, lanes, reach=2.0, step=0.05)  # past a lane (dy >= 1.65) is free too,
+    assert np.abs(beyond[:, 1]).max() <= g + 1e-9                       # but cut off from the truth: not slack
+    with pytest.raises(ValueError, match="need 0 < step <= reach"):
+        centre_slack(truth, lanes, reach=0.5, step=0.0)
 
 
-def test_a_box_seen_from_one_side_sinks_away_from_it_and_points_inside_rule_moves_out():
-    """Closed forms: one lane 0.05 above the box's top lets it move along the lane and down as far as the
-    lattice goes, and up by 0.05 only; a point inside the box rules the box as it is out; points
-    everywhere leave no move (nan)."""
+def test_a_box_seen_from_one_side_sinks_away_from_it_and_a_point_inside_leaves_no_slide():
+    """Closed forms: one lane 0.05 above the box's top lets it slide along the lane and down as far as the
+    lattice goes, and up by 0.05 only; a point inside the box as it is leaves no slide (nan), as do
+    points everywhere."""
     from mutual.constraints.continuous.benchmark import centre_slack
     from mutual.constraints.continuous.benchmark.identifiability import indistinguishable_moves
     box = Box((0, 1), (-0.4, -1.2), (0.6, 0.4))
@@ -177,8 +181,7 @@ def test_a_box_seen_from_one_side_sinks_away_from_it_and_points_inside_rule_move
     moves = indistinguishable_moves(box, above, reach=0.5, step=0.05)
     assert moves[:, 1].max() == pytest.approx(0.05) and moves[:, 1].min() == pytest.approx(-0.5)
     assert np.ptp(moves[:, 0]) == pytest.approx(1.0)
-    moves = indistinguishable_moves(box, np.r_[above, [[0.0, 0.0]]], reach=0.5, step=0.05)
-    assert len(moves) and not np.any(np.all(np.abs(moves) < 1e-12, axis=1))
+    assert not len(indistinguishable_moves(box, np.r_[above, [[0.0, 0.0]]], reach=0.5, step=0.05))
     grid = np.stack(np.meshgrid(np.linspace(-3, 3, 121), np.linspace(-3, 3, 121)), axis=-1).reshape(-1, 2)
     farthest, spans, at_reach = centre_slack(box, grid, reach=0.5, step=0.05)
     assert math.isnan(farthest) and np.isnan(spans).all() and not at_reach

@@ -1,19 +1,20 @@
-"""How far the recordings pin an obstacle down: the moves of the true obstacle that the demonstrated
-states cannot rule out.
+"""How far the recordings pin an obstacle down: how far the true obstacle can slide from where it is
+without ever covering a demonstrated state.
 
-A demonstration says where the demonstrator went, not why it went round. Moved by ``d``, the true disk
-or box may still hold no demonstrated point: it is then exactly as consistent with where the
-demonstrators went as the truth. A method that reads the obstacle from that alone (the largest empty
-obstacle, the tightest consistent bound's analogue) can be off by up to the farthest such move,
-:func:`centre_slack`, without the data saying so; a method can place it closer only by trusting a
-model of how the demonstrator steers (the inference's maximum-entropy demonstrator, KKT's local
-optimality), which hand-written demonstrators need not follow. Moves are tried on a lattice of ``STEP``
-within ``REACH`` of the truth along each axis of the obstacle's plane.
+A demonstration says where the demonstrator went, not why it went round. Slid by ``d`` along a path on which
+it never covers a demonstrated point, the true disk or box is exactly as consistent with where the
+demonstrators went as the truth: the data alone leave its centre at least ``|d|`` open. (Positions cut off
+from the truth by the data, say beyond a lane, are left out: they are other explanations, not slack.) A
+method places it closer only with knowledge beyond where the demonstrators went: a model of how they steer
+(the inference's maximum-entropy demonstrator, KKT's local optimality), or a prior on where obstacles may be.
+Moves are tried on a lattice of ``step`` within ``reach`` of the truth along each axis of its plane; a
+slide that reaches the lattice's edge is reported as "at least".
 """
 
 import math
 
 import numpy as np
+from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from ..regions import Box, Disk
@@ -25,46 +26,62 @@ _CHUNK = 2048  # moves per block of the box test
 
 
 def _lattice(reach, step):
-    axis = step * np.arange(-round(reach / step), round(reach / step) + 1)
-    dx, dy = np.meshgrid(axis, axis, indexing="ij")
-    return np.c_[dx.ravel(), dy.ravel()]
+    """The moves (n, n, 2) ``step * (i, j)`` for |i|, |j| <= reach / step (never past ``reach``)."""
+    if not (np.isfinite(step) and step > 0 and np.isfinite(reach) and reach >= step):
+        raise ValueError(f"reach, step: need 0 < step <= reach, got reach={reach!r}, step={step!r}")
+    k = int(math.floor(reach / step + 1e-9))
+    axis = step * np.arange(-k, k + 1)
+    return np.stack(np.meshgrid(axis, axis, indexing="ij"), axis=-1)
+
+
+def _free(truth, points, moves):
+    """Booleans (n, n): the moved obstacle holds none of the ``points`` (N, 2) strictly inside."""
+    flat = moves.reshape(-1, 2)
+    if isinstance(truth, Disk):
+        distance, _ = cKDTree(points).query(np.asarray(truth.center) + flat)
+        return (distance >= truth.radius).reshape(moves.shape[:2])
+    low, high = np.asarray(truth.low, dtype=float), np.asarray(truth.high, dtype=float)
+    far = np.abs(flat).max()
+    points = points[np.all((points > low - far) & (points < high + far), axis=1)]  # only these can be covered
+    free = np.ones(len(flat), dtype=bool)
+    for start in range(0, len(flat), _CHUNK):
+        m = flat[start:start + _CHUNK, None, :]
+        free[start:start + _CHUNK] = ~np.any(np.all((points > low + m) & (points < high + m), axis=2), axis=1)
+    return free.reshape(moves.shape[:2])
 
 
 def indistinguishable_moves(truth, points, reach=REACH, step=STEP):
     """The moves (K, 2) of the obstacle ``truth`` (a :class:`~..regions.Disk` or :class:`~..regions.Box`)
-    in its plane, on a lattice of ``step`` in [-reach, reach]^2, after which it holds none of the
-    ``points`` (N, d) strictly inside, as :meth:`inside` counts them."""
+    in its plane, on a lattice of ``step`` within ``reach`` per axis, to which it slides from where it is
+    through lattice neighbours without ever holding one of the ``points`` (N, d) strictly inside, as
+    :meth:`inside` counts them; none when the truth itself holds a point."""
     if not isinstance(truth, (Disk, Box)):
         raise ValueError(f"truth: must be a Disk or a Box, got {type(truth).__name__}")
     moves = _lattice(reach, step)
-    p = np.asarray(points, dtype=float)[:, list(truth.dims)]
-    if isinstance(truth, Disk):
-        distance, _ = cKDTree(p).query(np.asarray(truth.center) + moves)
-        return moves[distance >= truth.radius]
-    low, high = np.asarray(truth.low, dtype=float), np.asarray(truth.high, dtype=float)
-    p = p[np.all((p > low - reach) & (p < high + reach), axis=1)]  # only these can fall inside a moved box
-    free = np.ones(len(moves), dtype=bool)
-    for start in range(0, len(moves), _CHUNK):
-        m = moves[start:start + _CHUNK, None, :]
-        free[start:start + _CHUNK] = ~np.any(np.all((p > low + m) & (p < high + m), axis=2), axis=1)
-    return moves[free]
+    free = _free(truth, np.asarray(points, dtype=float)[:, list(truth.dims)], moves)
+    centre = moves.shape[0] // 2
+    if not free[centre, centre]:
+        return np.zeros((0, 2))
+    labels, _ = ndimage.label(free)
+    return moves[labels == labels[centre, centre]]
 
 
 def centre_slack(truth, points, reach=REACH, step=STEP):
-    """``(farthest, spans, at_reach)``: the length of the farthest indistinguishable move (nan when even the
-    truth holds a point), the extent of those moves along each axis of the plane (2,), and whether they
-    reach the lattice's edge (then the slack is at least ``reach``)."""
+    """``(farthest, spans, at_reach)``: the length of the farthest slide of :func:`indistinguishable_moves`
+    (nan when the truth itself holds a point), the extent of the slides along each axis of the plane (2,),
+    and whether they reach the lattice's edge (then the slack is at least ``farthest``)."""
     moves = indistinguishable_moves(truth, points, reach, step)
     if not len(moves):
         return math.nan, np.full(2, np.nan), False
     farthest = float(np.max(np.hypot(moves[:, 0], moves[:, 1])))
     spans = moves.max(axis=0) - moves.min(axis=0)
-    return farthest, spans, bool(np.any(np.abs(moves) >= reach - 1e-9))
+    edge = step * math.floor(reach / step + 1e-9)
+    return farthest, spans, bool(np.any(np.abs(moves) >= edge - 1e-9))
 
 
 def slack_table(split="all", systems=None, reach=REACH, step=STEP):
-    """Per obstacle case of ``split``: how far the true obstacle can move with no demonstrated point inside
-    (:func:`centre_slack`; "at least" where the moves reach the lattice's edge)."""
+    """Per obstacle case of ``split``: how far the true obstacle slides without covering a demonstrated point
+    (:func:`centre_slack`; "at least" where the slides reach the lattice's edge)."""
     import pandas as pd
     rows = []
     for case in cases(split, systems):
@@ -73,7 +90,7 @@ def slack_table(split="all", systems=None, reach=REACH, step=STEP):
             continue
         farthest, spans, at_reach = centre_slack(truth[0], np.concatenate(case_recording(case).states), reach, step)
         rows.append({"case": case.id, "split": case.split, "truth": case.truth_text,
-                     "farthest indistinguishable move (m)": farthest, "at least (lattice edge)": at_reach,
+                     "farthest slide (m)": farthest, "at least (lattice edge)": at_reach,
                      "span along x (m)": spans[0], "span along y (m)": spans[1]})
     return pd.DataFrame(rows)
 
