@@ -100,7 +100,9 @@ def test_on_a_lattice_system_the_likelihood_and_the_gain_of_a_bound_equal_enumer
 
 
 @pytest.mark.parametrize("keep_bytes", [pw.KEEP_BYTES, 0])
-def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_successors_or_not(keep_bytes, monkeypatch):
+@pytest.mark.parametrize("steps", [4, 2])  # whole demonstrations, and prefixes (their ends enter the gradient)
+def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_successors_or_not(keep_bytes, steps,
+                                                                                                 monkeypatch):
     """Eq. 2.8's gradient (expected less demonstrated features) against central differences of the exact
     log-likelihood, under a bound, with log Z at the successors kept from the value (barycentric) or
     recomputed (KEEP_BYTES = 0): the same to rounding."""
@@ -109,7 +111,8 @@ def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_s
     states, controls, returns = enumerate_paths(p, [0.0], p.horizon)
     prob = np.where((states[:, :, 0] <= 0.6).all(axis=1), np.exp(returns - returns.max()), 0.0)
     picks = np.random.default_rng(2).choice(len(returns), size=4, p=prob / prob.sum())
-    data = ev.demonstrated(p, recording(states[picks], controls[picks], p.dt))
+    data = ev.demonstrated(p, recording(states[picks][:, :steps + 1], controls[picks][:, :steps], p.dt))
+    assert (data.ends is None) == (steps == p.horizon)
     model, regions = pw.point_model(p), [Bound(0, "upper", 0.6)]
     w = pw.file_weights(p) * np.array([1.0, 0.7, 1.3])
     successors = []
