@@ -115,7 +115,7 @@ def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_s
     assert (data.ends is None) == (steps == p.horizon)
     model, regions = pw.point_model(p), [Bound(0, "upper", 0.6)]
     w = pw.file_weights(p) * np.array([1.0, 0.7, 1.3])
-    successors = []
+    successors = ["from an earlier call"]                  # replaced when kept, emptied when not
     ll, logZ = ev.log_likelihood(model, data, regions, w, successors)
     assert len(successors) == (p.horizon if keep_bytes else 0)
     grad = ev.log_likelihood_gradient(model, data, regions, w, logZ, successors)

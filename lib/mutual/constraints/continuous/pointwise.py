@@ -243,8 +243,8 @@ def log_partition(model, regions=(), weights=1.0, successors=None):
     logZ = np.empty((model.horizon + 1, ok.shape[0]))
     logZ[-1] = _terminal(model, ok, weights)
     keep = successors is not None and mass is not None and mv.target.shape[0] * model.horizon * 8 <= KEEP_BYTES
-    if keep:
-        successors[:] = [None] * model.horizon
+    if successors is not None:  # emptied when not kept, so a list passed again never holds another call's values
+        successors[:] = [None] * model.horizon if keep else []
     for t in range(model.horizon - 1, -1, -1):
         at = successor_log_values(mv, logZ[t + 1], cell_ok, mass)
         if keep:
