@@ -26,13 +26,13 @@ def _problem(horizon=10):
     return Problem(SYSTEM, GRID, [-3.0, 0.0, 3.0], 0.1, horizon, QuadraticReward([np.pi, 0], [1, 0.1], [0.0], [1, 1]))
 
 
-def _recorded(n=4, steps=10, seed=0):
-    """Forward recordings of the pendulum under random controls of the set, as the CSV table."""
+def _recorded(n=4, steps=10, seed=0, levels=(-3.0, 0.0, 3.0)):
+    """Forward recordings of the pendulum under random controls of ``levels`` (the set's), as the CSV table."""
     rng = np.random.default_rng(seed)
     x = np.column_stack([rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)])
     rows = []
     for k in range(steps + 1):
-        u = rng.choice([-3.0, 0.0, 3.0], size=n)
+        u = rng.choice(levels, size=n)
         for d in range(n):
             rows.append({"demo": f"demo-{d:03d}", "t": round(0.1 * k, 10), "theta": x[d, 0], "theta_dot": x[d, 1],
                          "torque": u[d] if k < steps else np.nan})
@@ -78,6 +78,11 @@ WARNED = [  # (case, the recording, phrases of the warning)
       "check the unit"]),
     ("one torque far outside", GOOD.assign(torque=GOOD["torque"].where(GOOD.index != 9, 40.0)),
      ["line 11, column 'torque'", "1 of 40 recorded"]),
+    ("torque in kN m", GOOD.assign(torque=GOOD["torque"] / 1000),
+     ["column 'torque'", "do not explain the recorded motion", "'torque' about 1000 times the recorded one"]),
+    ("torque with its sign reversed", GOOD.assign(torque=-GOOD["torque"]),
+     ["'torque' about -1 times the recorded one (its sign looks reversed)", "check the unit and the sign"]),
+    ("torque normalised to [-1, 1]", GOOD.assign(torque=GOOD["torque"] / 3), ["'torque' about 3 times the recorded one"]),
 ]
 
 
@@ -92,7 +97,8 @@ def test_likely_unit_mistakes_are_warned_about(case, data, phrases, tmp_path):
     ("as recorded", GOOD),
     ("at rest", GOOD.assign(theta=0.0, theta_dot=0.0, torque=0.0)),
     ("rows in reverse order, t with them", GOOD.iloc[::-1]),
-    ("torques slightly beyond the set", GOOD.assign(torque=GOOD["torque"] * 1.5)),
+    ("torques slightly beyond the set, as they acted", _recorded(levels=(-4.5, 0.0, 4.5))),
+    ("torques recorded with a little noise", GOOD.assign(torque=GOOD["torque"] + np.random.default_rng(1).normal(0, 0.1, len(GOOD)))),
     ("exactly the horizon", GOOD),
     ("angles that wind past the box by less than a turn", GOOD.assign(theta=GOOD["theta"] + 2 * np.pi)),
 ])
@@ -152,6 +158,28 @@ def test_a_two_dimensional_control_set_is_read(tmp_path):
     problem = load_system(_system(tmp_path)).problem
     assert problem.controls.tolist() == [[1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 0.0]]
     assert problem.system.file == str((tmp_path / "planar.py").resolve())
+
+
+def test_one_control_of_two_with_its_sign_reversed_is_named_alone(tmp_path):
+    """The planar system moves by u dt: recordings made with controls of the set (the zero control where a step
+    would leave the box), then 'vy' negated in the file; the warning names 'vy' (about -1 times) and not 'vx'
+    (whose recorded values explain the steps)."""
+    problem = load_system(_system(tmp_path)).problem
+    rng = np.random.default_rng(3)
+    x, rows = np.tile([1.5, 1.0], (3, 1)), []
+    for k in range(13):
+        u = problem.controls[rng.integers(len(problem.controls), size=3)]
+        u[problem.grid.outside(x + 0.25 * u)] = 0.0
+        rows += [{"demo": f"d{d}", "t": 0.25 * k, "x": x[d, 0], "y": x[d, 1], "vx": u[d, 0], "vy": -u[d, 1]}
+                 for d in range(3)]
+        x = x + 0.25 * u
+    path = tmp_path / "planar.csv"
+    pd.DataFrame(rows).to_csv(path, index=False)
+    with pytest.warns(InputWarning) as record:
+        check_recording(problem, read_recording(path, problem.system.state_names, problem.system.control_names))
+    message = " ".join(str(w.message) for w in record)
+    assert "columns 'vx', 'vy'" in message and "'vy' about -1 times the recorded one" in message, message
+    assert "'vx' about" not in message, message
 
 
 SYSTEM_MISTAKES = [  # (case, spec, [control] values, [simulate] start, phrases of the error)

@@ -165,8 +165,8 @@ def _step_controls(C, picks, k, L):
 def check_plausible(problem, recording, states, controls, index):
     """What a user gets wrong in recordings that still read, for the aligned ``states`` (N, L+1, n), ``controls``
     (N, L, m) or None and sample ``index`` of :func:`align`: demonstrations longer than the horizon and time that
-    runs backwards are refused; angles that look like degrees and recorded controls far outside the control set
-    are warned about (:class:`mutual.inputs.InputWarning`)."""
+    runs backwards are refused; angles that look like degrees, recorded controls far outside the control set and
+    recorded controls that do not explain the recorded motion are warned about (:class:`mutual.inputs.InputWarning`)."""
     L = states.shape[1] - 1
     if L > problem.horizon:
         raise ValueError(f"{recording.where(0, index[0, -1], 't')}: the demonstrations span {L} steps of dt = "
@@ -179,14 +179,15 @@ def check_plausible(problem, recording, states, controls, index):
                                      times=recording.times)
         if message:
             warn(message)
-    if recording.controls is not None:
-        _check_control_range(problem, recording)
+    if recording.controls is not None and not _check_control_range(problem, recording):
+        _check_control_motion(problem, recording, states, controls)
     _check_time_direction(problem, recording, states)
 
 
 def _check_control_range(problem, recording):
-    """Warn about recorded controls more than the control set's width outside it (each is snapped to its edge)."""
-    names = problem.system.control_names
+    """Warn about recorded controls more than the control set's width outside it (each is snapped to its edge);
+    True if it warned."""
+    names, warned = problem.system.control_names, False
     for j, name in enumerate(names):
         lo, hi = problem.controls[:, j].min(), problem.controls[:, j].max()
         width = hi - lo if hi > lo else max(abs(lo), 1.0)
@@ -199,6 +200,40 @@ def _check_control_range(problem, recording):
             warn(f"{recording.where(d, far[d][0], name)}: {count} of {total} recorded {name!r} values lie more than "
                  f"the control set's width outside it ([{lo:g}, {hi:g}]; up to {top:.4g} in magnitude); each is "
                  "snapped to the nearest control of the set, so check the unit (or widen [control] values)")
+            warned = True
+    return warned
+
+
+def _check_control_motion(problem, recording, states, controls, most=2000):
+    """Warn when the recorded controls do not explain the recorded motion: on more than a quarter of the steps, a
+    step taken with the recorded control misses the next state by more than twice the best control's miss and
+    by more than a quarter of the spread between the set's predictions. A unit or sign mistake that stays
+    inside the set (kN m for N m, a reversed sign) shows so; the least-squares factor between the best
+    controls and the recorded ones names it, per control."""
+    n, m = states.shape[2], controls.shape[2]
+    x, nxt, u = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n), controls.reshape(-1, m)
+    recorded = np.flatnonzero(np.isfinite(u).all(axis=1))
+    if recorded.size < 10:
+        return
+    pick = recorded[np.linspace(0, recorded.size - 1, min(most, recorded.size)).astype(int)]
+    grid = problem.grid
+    x, nxt, u = grid.wrap(x[pick]), grid.wrap(nxt[pick]), u[pick]
+    own, miss = _distance(grid, problem.step(x, u), nxt), _misses(problem, x, nxt)
+    best, spread = miss.min(axis=1), miss.max(axis=1) - miss.min(axis=1)
+    wrong = own > np.maximum(np.maximum(2 * best, 0.25 * spread), 1e-6)
+    if not wrong.mean() > 0.25:
+        return
+    names, fitted = problem.system.control_names, problem.controls[miss.argmin(axis=1)]
+    factor = (fitted * u).sum(axis=0) / np.maximum((u * u).sum(axis=0), 1e-300)
+    off = [f"{name!r} about {a:.4g} times the recorded one{' (its sign looks reversed)' if a < 0 else ''}"
+           for name, a in zip(names, factor) if not 0.8 <= a <= 1.25]
+    hint = ("the controls that explain the steps are " + ", ".join(off) + ": check the unit and the sign"
+            if off else "check the system's [parameters] and that each row's control acts from its t to the next row's")
+    where = f"column {names[0]!r}" if m == 1 else "columns " + ", ".join(map(repr, names))
+    warn(f"{recording.source}, {where}: the recorded controls do not explain the recorded motion: on "
+         f"{wrong.mean():.0%} of the steps a step with the recorded control misses the next state by "
+         f"{np.median(own[wrong]):.3g} cell widths (median), a step with the best control of the set by "
+         f"{np.median(best[wrong]):.2g}; {hint}")
 
 
 def _distance(grid, a, b):
@@ -212,10 +247,10 @@ def _distance(grid, a, b):
 
 
 def _misses(problem, x, nxt):
-    """The best one-step prediction's distance from each state x (k, n) to nxt (k, n), in cell widths."""
+    """(k, A): each control's one-step prediction's distance from the states x (k, n) to nxt (k, n), in cell widths."""
     A = problem.n_actions
     pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
-    return _distance(problem.grid, pred, nxt[:, None, :]).min(axis=1)
+    return _distance(problem.grid, pred, nxt[:, None, :])
 
 
 def _check_time_direction(problem, recording, states, most=2000):
@@ -226,10 +261,11 @@ def _check_time_direction(problem, recording, states, most=2000):
     x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
     pick = np.linspace(0, len(x) - 1, min(most, len(x))).astype(int)
     x, nxt = problem.grid.wrap(x[pick]), problem.grid.wrap(nxt[pick])
-    forward, step = float(np.median(_misses(problem, x, nxt))), float(np.median(_distance(problem.grid, nxt, x)))
+    forward = float(np.median(_misses(problem, x, nxt).min(axis=1)))
+    step = float(np.median(_distance(problem.grid, nxt, x)))
     if not forward > max(0.5 * step, 0.05):           # the dynamics explain the steps (or nothing moves)
         return
-    backward = float(np.median(_misses(problem, nxt, x)))
+    backward = float(np.median(_misses(problem, nxt, x).min(axis=1)))
     if backward < 0.25 * forward:
         raise ValueError(f"{recording.source}, column 't': the recorded motion runs backwards in time: in the order "
                          f"of t, the dynamics' best one-step prediction misses the next state by {forward:.3g} cell "
