@@ -124,6 +124,31 @@ def test_the_limits_in_force_apply_inside_their_block_only(monkeypatch):
     assert budget.check(BIG) is BIG                                     # outside: no time limit
 
 
+def test_a_request_let_through_is_said_when_it_is_long_or_large(monkeypatch):
+    """Inside limits(say=...): a request above NOTICE_SECONDS or NOTICE_BYTES is said once, before it starts,
+    whether the limits or allow_large let it through; a small one is not; a refused one raises without a word."""
+    monkeypatch.setattr(budget, "available_bytes", lambda: 2 ** 40)
+    small = budget.Estimate("a small request", 2 ** 20, 1.0, "ask for less")
+    large = budget.Estimate("a large request", 4 * 2 ** 30, 1.0, "ask for less")
+    said = []
+    with budget.limits(minutes=120, say=said.append):
+        budget.check(small)
+        budget.check(BIG)
+        budget.check(large)
+    assert said == ["a big request: about 10 GiB of memory and 1 hours (estimated before starting; 1.02e+03 GiB are "
+                    "available, the limit is 120 minutes)",
+                    "a large request: about 4 GiB of memory and 1 s (estimated before starting; 1.02e+03 GiB are "
+                    "available, the limit is 120 minutes)"]
+    with budget.limits(minutes=30, say=said.append):
+        with pytest.raises(budget.TooLarge):
+            budget.check(BIG)
+        assert len(said) == 2
+        budget.check(BIG, allow_large=True)
+    assert len(said) == 3 and "the limit is 30 minutes" in said[-1]
+    budget.check(BIG)                                                     # outside the block: nobody to tell
+    assert len(said) == 3
+
+
 @pytest.mark.parametrize("text, minutes", [("", 30), ("5", 5.0), (" 0.5 ", 0.5)])
 def test_the_command_lines_time_limit_comes_from_the_environment(text, minutes):
     assert budget.command_line_minutes({budget.MINUTES_ENV: text}) == minutes

@@ -58,7 +58,9 @@ LQ_STEP_BYTES = 400              # one step of one hypothesis of the legible LQ 
 ROW_BYTES = 200                  # one recorded state kept as a Python row (array view and list slot)
 CSV_BYTE_BYTES = 12              # one byte of a CSV file: its bytes, its text, its lines and their cells as text
 
-_LIMITS = ContextVar("mutual_budget_limits", default=(None, False, None))
+_LIMITS = ContextVar("mutual_budget_limits", default=(None, False, None, None))
+NOTICE_SECONDS = 60              # a request estimated above this (or NOTICE_BYTES) is said before it starts
+NOTICE_BYTES = 2 * GIB
 
 
 @dataclass(frozen=True)
@@ -145,14 +147,26 @@ def command_line_minutes(environ=os.environ):
 
 
 @contextmanager
-def limits(minutes=None, allow_large=False, flag=None):
+def limits(minutes=None, allow_large=False, flag=None, say=None):
     """State the limits for the checks made inside the block (module docstring). ``flag``: how the
-    refusal tells the user to go ahead (the command line's ``--allow-large``)."""
-    token = _LIMITS.set((minutes, bool(allow_large), flag))
+    refusal tells the user to go ahead (the command line's ``--allow-large``); ``say``: called with one line
+    for each request let through whose estimate exceeds NOTICE_SECONDS or NOTICE_BYTES, before it starts
+    (once per request, however often it is checked)."""
+    token = _LIMITS.set((minutes, bool(allow_large), flag, None if say is None else _once(say)))
     try:
         yield
     finally:
         _LIMITS.reset(token)
+
+
+def _once(say):
+    said = set()
+
+    def once(line):
+        if line not in said:
+            said.add(line)
+            say(line)
+    return once
 
 
 def _state():
@@ -168,15 +182,17 @@ def check(estimate, allow_large=None, minutes=None):
     """Raise :class:`TooLarge` when ``estimate`` needs more memory than :func:`available_bytes` or more time
     than ``minutes`` (default: the limit in force, :func:`limits`); ``allow_large`` (default: as the limits in
     force say) lets it through. Returns the estimate."""
-    stated, allowed, _ = _state()
-    if allowed if allow_large is None else allow_large:
-        return estimate
+    stated, allowed, _, say = _state()
     minutes = stated if minutes is None else minutes
     free = available_bytes()
-    if estimate.bytes > free:
-        raise TooLarge(estimate, f"{memory(free)} are available")
-    if minutes is not None and estimate.seconds > 60 * minutes:
-        raise TooLarge(estimate, f"the limit is {minutes:g} minutes")
+    if not (allowed if allow_large is None else allow_large):
+        if estimate.bytes > free:
+            raise TooLarge(estimate, f"{memory(free)} are available")
+        if minutes is not None and estimate.seconds > 60 * minutes:
+            raise TooLarge(estimate, f"the limit is {minutes:g} minutes")
+    if say is not None and (estimate.seconds > NOTICE_SECONDS or estimate.bytes > NOTICE_BYTES):
+        limit = f", the limit is {minutes:g} minutes" if minutes is not None else ""
+        say(f"{estimate} (estimated before starting; {memory(free)} are available{limit})")
     return estimate
 
 

@@ -106,6 +106,24 @@ def test_the_time_limit_is_stated_by_the_environment_and_the_flag_goes_ahead(tmp
     assert "MUTUAL_MAX_MINUTES = 'soon'" in capsys.readouterr().err
 
 
+def test_a_long_request_that_goes_ahead_says_its_estimate_first(tmp_path, monkeypatch, capsys):
+    """A request let through but estimated above a minute is said on stderr before it starts (here the threshold is
+    lowered to 0 s, so this small ANOVA is 'long'); one estimated below it is not; --allow-large past the limit too."""
+    from mutual import budget
+    monkeypatch.chdir(tmp_path)
+    Path("data.csv").write_text(_levels_csv(3, 4))
+    assert main(ANOVA + ["--out", "quiet"]) == 0
+    assert "estimated before starting" not in capsys.readouterr().err
+    monkeypatch.setattr(budget, "NOTICE_SECONDS", 0.0)
+    assert main(ANOVA + ["--out", "said"]) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "3 levels x 4 subjects" in line]
+    assert len(said) == 1 and said[0].startswith("mutual study anova: ") and "estimated before starting" in said[0]
+    assert "the limit is 30 minutes" in said[0] and "are available" in said[0], said
+    monkeypatch.setenv("MUTUAL_MAX_MINUTES", "1e-9")
+    assert main(ANOVA + ["--out", "allowed", "--allow-large"]) == 0
+    assert "the limit is 1e-09 minutes" in capsys.readouterr().err
+
+
 def test_too_many_levels_to_draw_write_the_tables_and_say_so(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     Path("data.csv").write_text(_levels_csv(31))

@@ -37,6 +37,23 @@ def test_failures_name_the_module_file_and_line(case, source, name, phrases, tmp
     assert message.startswith(("s.toml: key 'system'", "system: ")), message
 
 
+class _Stop(BaseException):
+    """What the command line raises on SIGTERM (mutual.cli.common.Terminated): not an exception of the user's code."""
+
+
+@pytest.mark.parametrize("where", ["import", "call"])
+def test_an_interrupt_or_termination_inside_the_users_code_is_not_blamed_on_it(where, tmp_path, monkeypatch):
+    """A SIGTERM (a BaseException of the command line) or Ctrl-C while the module loads or runs goes through
+    unchanged: the run ends as terminated, never as 'the system file's dynamics raised Terminated'."""
+    stop = "raise STOP()\n" if where == "import" else "def f(x, u):\n    raise STOP()\n"
+    for kind in (_Stop, KeyboardInterrupt):
+        module = f"stops_{where}_{kind.__name__}"
+        (tmp_path / f"{module}.py").write_text("import builtins\nSTOP = builtins.STOP\n" + stop)
+        monkeypatch.setattr("builtins.STOP", kind, raising=False)
+        with pytest.raises(kind):
+            call(load_function(f"{module}:f", tmp_path, "s.toml: key 'system'"), (1, 2), None, "system")
+
+
 def test_prints_at_import_go_to_stderr(tmp_path, capsys):
     (tmp_path / "chatty_dynamics.py").write_text("print('hello from the import')\ndef f(x, u):\n    return x\n")
     user = load_function("chatty_dynamics:f", tmp_path)

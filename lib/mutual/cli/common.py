@@ -15,6 +15,7 @@ import re
 import sys
 import warnings
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 
 from .. import budget
@@ -310,7 +311,8 @@ def run(args, prog):
             minutes = budget.command_line_minutes()
         except ValueError as err:
             raise InputError(str(err)) from None
-        with budget.limits(minutes, getattr(args, "allow_large", False), "--allow-large"), \
+        say = partial(print, f"{prog}:", file=sys.stderr)     # a large request's estimate, before it starts
+        with budget.limits(minutes, getattr(args, "allow_large", False), "--allow-large", say), \
                 warnings.catch_warnings():
             warnings.showwarning = _show_warning(prog)
             args.handler(args)

@@ -106,9 +106,7 @@ def load_function(spec, folder=None, where="system"):
     try:
         with contextlib.redirect_stdout(sys.stderr):
             loaded = _import(module, local, folder)
-    except KeyboardInterrupt:
-        raise
-    except BaseException as err:
+    except (Exception, SystemExit) as err:      # an interrupt or a termination is not the module's failure
         raise ValueError(f"{where}: importing module {module!r} ({file}) {_failure(err, file)}") from None
     function = getattr(loaded, name, None)
     if not callable(function):
@@ -121,8 +119,6 @@ def call(user, args=(), kwargs=None, where=None):
     function and its file (and the line where it was raised); ``where``: what the message starts with."""
     try:
         return user.function(*args, **(kwargs or {}))
-    except KeyboardInterrupt:
-        raise
-    except BaseException as err:
+    except (Exception, SystemExit) as err:      # an interrupt or a termination is not the function's failure
         raise ValueError(f"{where + ': ' if where else ''}{user.spec} ({user.file}) {_failure(err, user.file)}") \
             from None
