@@ -100,18 +100,19 @@ def _when_jax_loads(where, reason, doing):
     if "jax" in sys.modules:
         unusable(where, reason, doing)
     else:
-        sys.meta_path.insert(0, _SayOnImport(lambda level: unusable(where, reason, doing, level)))
+        sys.meta_path.insert(0, _OnExecute("jax", before=lambda level: unusable(where, reason, doing, level)))
 
 
-class _SayOnImport(importlib.abc.MetaPathFinder):
-    """Calls ``say(stacklevel)`` once, when the ``jax`` package is executed (imported, not merely looked
-    up), with the stack level of the line that imports it, and lets the import go on."""
+class _OnExecute(importlib.abc.MetaPathFinder):
+    """Runs ``before(stacklevel)`` and ``after(module)`` (either may be None) once, when the module ``name`` is
+    executed (imported, not merely looked up), around its execution; ``stacklevel`` is that of the line that
+    imports it. The import itself is the other finders' and goes on unchanged."""
 
-    def __init__(self, say):
-        self.say = say
+    def __init__(self, name, before=None, after=None):
+        self.name, self.before, self.after = name, before, after
 
     def find_spec(self, name, path, target=None):
-        if name != "jax":
+        if name != self.name:
             return None
         spec = next((s for s in (f.find_spec(name, path, target) for f in sys.meta_path
                                  if f is not self and hasattr(f, "find_spec")) if s is not None), None)
@@ -120,10 +121,14 @@ class _SayOnImport(importlib.abc.MetaPathFinder):
         execute, finder = spec.loader.exec_module, self
 
         def exec_module(module):
-            if finder in sys.meta_path:
+            first = finder in sys.meta_path
+            if first:
                 sys.meta_path.remove(finder)
-                finder.say(4)  # warnings.warn counts unusable 1, say 2, here 3, then skips the import machinery
+                if finder.before is not None:  # warnings.warn counts unusable 1, before 2, here 3, then skips
+                    finder.before(4)           # the import machinery
             execute(module)
+            if first and finder.after is not None:
+                finder.after(module)
 
         spec.loader.exec_module = exec_module
         return spec
@@ -139,31 +144,8 @@ def authenticate_entries(folder):
     (module docstring): now if JAX's cache module is loaded, else when it is."""
     if TARGET in sys.modules:
         _wrap(sys.modules[TARGET], folder)
-    elif not any(isinstance(f, _OnImport) for f in sys.meta_path):
-        sys.meta_path.insert(0, _OnImport(folder))
-
-
-class _OnImport(importlib.abc.MetaPathFinder):
-    """Wraps JAX's cache module right after it is executed (it is imported by ``import jax``)."""
-
-    def __init__(self, folder):
-        self.folder = folder
-
-    def find_spec(self, name, path, target=None):
-        if name != TARGET:
-            return None
-        sys.meta_path.remove(self)
-        spec = importlib.util.find_spec(name)
-        if spec is None or spec.loader is None:
-            return spec
-        execute, folder = spec.loader.exec_module, self.folder
-
-        def exec_module(module):
-            execute(module)
-            _wrap(module, folder)
-
-        spec.loader.exec_module = exec_module
-        return spec
+    elif not any(isinstance(f, _OnExecute) and f.name == TARGET for f in sys.meta_path):
+        sys.meta_path.insert(0, _OnExecute(TARGET, after=lambda module: _wrap(module, folder)))
 
 
 def _wrap(module, folder):

@@ -98,7 +98,8 @@ def test_likely_unit_mistakes_are_warned_about(case, data, phrases, tmp_path):
     ("at rest", GOOD.assign(theta=0.0, theta_dot=0.0, torque=0.0)),
     ("rows in reverse order, t with them", GOOD.iloc[::-1]),
     ("torques slightly beyond the set, as they acted", _recorded(levels=(-4.5, 0.0, 4.5))),
-    ("torques recorded with a little noise", GOOD.assign(torque=GOOD["torque"] + np.random.default_rng(1).normal(0, 0.1, len(GOOD)))),
+    ("torques recorded with a little noise",
+     GOOD.assign(torque=GOOD["torque"] + np.random.default_rng(1).normal(0, 0.1, len(GOOD)))),
     ("exactly the horizon", GOOD),
     ("angles that wind past the box by less than a turn", GOOD.assign(theta=GOOD["theta"] + 2 * np.pi)),
 ])

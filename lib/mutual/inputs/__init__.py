@@ -6,7 +6,7 @@
 * :mod:`.columns` -- a column as numbers (:func:`number_column`) or names (:func:`name_column`),
   refusing a bad cell with its place.
 * :mod:`.names` -- one rule for names that differ only by spaces or Unicode encoding (:func:`check_names`).
-* :mod:`.tomltable` -- :func:`read_toml` (a file), :func:`parse_toml` (text) and :class:`Keys`, whose errors name ``FILE: key 'table.key'``.
+* :mod:`.tomltable` -- :func:`read_toml` and :class:`Keys`, whose errors name ``FILE: key 'table.key'``.
 * :mod:`.values` -- :func:`check_number`: a number within bounds, in one wording, with every digit shown.
 * :mod:`.units` -- angles that look like degrees (:func:`angle_unit_warning`, :class:`InputWarning`).
 * :mod:`.usercode` -- ``"module:function"`` loaded and called with failures named (:func:`load_function`).
@@ -20,12 +20,12 @@ numpy, not pandas (pandas is imported by the functions that build tables).
 from .columns import name_column, number_column, require_columns
 from .csvtable import Lines, format_exact, line_of, place, read_csv, write_csv
 from .names import check_names, name_key
-from .tomltable import MAX_DEPTH, Keys, parse_toml, read_toml
+from .tomltable import MAX_DEPTH, Keys, read_toml
 from .units import InputWarning, angle_unit_warning, warn
 from .usercode import UserFunction, call, load_function
 from .values import check_number, count, describe, exact_doubles, finite, number, number_text, positive, probability, real, shown
 
 __all__ = ["InputWarning", "Keys", "Lines", "MAX_DEPTH", "UserFunction", "angle_unit_warning", "call", "check_names",
            "check_number", "count", "describe", "exact_doubles", "finite", "format_exact", "line_of", "load_function", "name_column", "name_key", "number",
-           "number_column", "number_text", "parse_toml", "place", "positive", "probability", "read_csv", "read_toml", "real", "require_columns", "shown",
+           "number_column", "number_text", "place", "positive", "probability", "read_csv", "read_toml", "real", "require_columns", "shown",
            "warn", "write_csv"]

@@ -43,19 +43,13 @@ def read_toml(path):
         text = data.removeprefix(codecs.BOM_UTF8).decode("utf-8")
     except UnicodeDecodeError as err:
         raise ValueError(f"{path}: not valid TOML (not UTF-8 text: byte {err.start})") from None
-    return parse_toml(text, path)
-
-
-def parse_toml(text, source):
-    """The mapping in TOML ``text`` read from ``source`` (a file, or a name for built-in text); a
-    ValueError naming ``source`` when it is not valid TOML."""
     if text.count("[") + text.count("{") > MAX_DEPTH and _depth(text) > MAX_DEPTH:
-        raise ValueError(f"{source}: not valid TOML for mutual (arrays or tables nested more than {MAX_DEPTH} "
+        raise ValueError(f"{path}: not valid TOML for mutual (arrays or tables nested more than {MAX_DEPTH} "
                          "deep; no input of mutual needs more than 3)")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{source}: not valid TOML ({err})") from None
+        raise ValueError(f"{path}: not valid TOML ({err})") from None
 
 
 class Keys:
