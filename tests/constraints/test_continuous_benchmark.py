@@ -2,7 +2,8 @@
 
 Independent truths: the hidden regions themselves (demonstrations never enter them and ride their
 limit), braking distances in closed form, brute force for the largest empty disk and box, hand-made
-answers with known errors, and the command line against the Python API on the same files.
+answers with known errors. The quick suite itself runs in notebook 09's quick run, and is checked there
+(tests/notebooks/test_chapter_results.py), the command line against the Python API on the same file.
 """
 
 import math
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from mutual.constraints.continuous import Bound, Box, Disk
-from mutual.constraints.continuous.benchmark import Answer, all_cases, case_recording, cases, run_benchmark, score
+from mutual.constraints.continuous.benchmark import Answer, all_cases, case_recording, cases, score
 from mutual.constraints.continuous.benchmark import demonstrators, naive
 from mutual.constraints.continuous.benchmark.setups import SETUPS
 
@@ -120,26 +121,6 @@ def test_score_counts_accepted_constraints_that_lowered_the_exact_likelihood():
     got = score(Answer((Bound(1, "upper", 5.1), Bound(0, "lower", 1.0)), (0.4, -0.2)), [Bound(1, "upper", 5.0)])
     assert got["lowered likelihood"] == 1
     assert score(Answer((Bound(1, "upper", 5.1),), None), [Bound(1, "upper", 5.0)])["lowered likelihood"] is None
-
-
-def test_quick_benchmark_runs_every_method_and_the_command_line_agrees_with_the_python_api():
-    """The quick suite (make test): a pendulum speed limit (run through the command line) and an
-    unconstrained double integrator. The naive bound's error is the recorded extreme's distance to
-    the truth; on the unconstrained case it always answers (one false positive)."""
-    frame = run_benchmark("development", quick=True)
-    assert list(frame["case"]) == ["pendulum-A-filter-narrow", "double_integrator-U-lagged-wide"]
-    pendulum, free = frame.iloc[0], frame.iloc[1]
-    states = np.concatenate(case_recording(_case("pendulum-A-filter-narrow")).states)
-    assert pendulum["naive: error"] == pytest.approx(5.0 - states[:, 1].max())
-    assert free["naive: false positives"] == 1 and math.isnan(free["naive: error"])
-    for method in ("inference", "naive", "kkt"):
-        assert not str(pendulum[f"{method}: note"]).startswith("FAILED"), pendulum[f"{method}: note"]
-    from mutual.constraints.continuous.benchmark.methods import inference_answer
-    case = _case("pendulum-A-filter-narrow")
-    api = inference_answer(case.setup.system_file(), case_recording(case))
-    assert pendulum["inference: chosen"] == ("; ".join(
-        f"{('theta', 'theta_dot')[r.dim]} {'<=' if r.side == 'upper' else '>='} {r.value:.3f}" for r in api.regions)
-        or "none")
 
 
 def _ring(center, radius, n=720):

@@ -143,3 +143,31 @@ def test_notebook_06_reports_every_claim_with_its_computation(executed_notebook)
                 "c7-mpc-anticipation-exaggeration", "c6-fig61-h1-avoids-but-close", "c6-fig61-legible-farther",
                 "c6-ds-too-slow-on-a-car", "c7-belief-shows-correction"):
         assert set(claims[cid]["scan"]) == {"table", "seeds", "settings", "flips"}, cid
+
+
+def test_notebook_09_quick_benchmark_runs_every_method_and_its_command_line_agrees_with_the_python_api(
+        executed_notebook):
+    """Notebook 09's quick run scores the quick suite: a pendulum speed limit (the inference run through the
+    command line, as a user would) and an unconstrained double integrator. Truths: the naive bound's error is
+    the recorded extreme's distance to the true limit 5.0; on the unconstrained case it always answers (one
+    false positive); every method finds the approached bound (a method that fails finds nothing); and the
+    command line's constraints are those of the Python API on the same recording."""
+    from mutual.constraints.continuous.benchmark import all_cases, case_recording
+    from mutual.constraints.continuous.benchmark.suite import QUICK
+    from mutual.constraints.continuous.benchmark.methods import inference_answer
+    executed_notebook("09_continuous_constraints")
+    table = pd.read_csv(executed_notebook.folder / "table_ext_continuous_benchmark.csv", dtype=str,
+                        keep_default_na=False)
+    assert tuple(table["case"]) == QUICK == ("pendulum-A-filter-narrow", "double_integrator-U-lagged-wide")
+    pendulum, free = table.iloc[0], table.iloc[1]
+    case = next(c for c in all_cases() if c.id == QUICK[0])
+    recording = case_recording(case)
+    assert float(pendulum["naive error"]) == pytest.approx(5.0 - np.concatenate(recording.states)[:, 1].max(),
+                                                           abs=5e-4)
+    assert free["naive false positives"] == "1" and free["naive error"] == "-"
+    for method in ("inference", "naive", "kkt"):
+        assert pendulum[f"{method} error"] not in ("not found", "-"), method
+    api = inference_answer(case.setup.system_file(), recording)
+    assert pendulum["inference: chosen"] == ("; ".join(
+        f"{('theta', 'theta_dot')[r.dim]} {'<=' if r.side == 'upper' else '>='} {r.value:.3f}" for r in api.regions)
+        or "none")
