@@ -198,12 +198,20 @@ SYSTEM_MISTAKES = [  # (case, spec, [control] values, [simulate] start, phrases 
      ["importing module 'raises'", "raised RuntimeError: licence server unreachable at line 1 of"]),
     ("a start inside the hidden region", "planar:f", CONTROLS_2D, "[0.25, 1.6]",
      ["key 'simulate.start'", "[0.25, 1.6] lies inside the hidden region 'y <= 1.4'"]),
+    ("own dynamics without state names", "planar:f", CONTROLS_2D, "[0.25, 1.0]",
+     ["key 'state.names': missing: a system given as 'module:function' names its 2 state coordinates"]),
+    ("own dynamics without control names", "planar:f", CONTROLS_2D, "[0.25, 1.0]",
+     ["key 'control.names': missing: a system given as 'module:function' names its controls"]),
 ]
 
 
 @pytest.mark.parametrize("case, spec, values, start, phrases", SYSTEM_MISTAKES, ids=[c[0] for c in SYSTEM_MISTAKES])
 def test_mistakes_in_system_files_name_the_file_and_the_key(case, spec, values, start, phrases, tmp_path):
     path = _system(tmp_path, spec, values, start)
+    if "without" in case:                                  # the same file, that table's names commented out
+        text = path.read_text()
+        at = text.index("[state]" if "state" in case else "[control]")
+        path.write_text(text[:at] + text[at:].replace("names = ", "# names = ", 1))
     with pytest.raises(ValueError) as err:
         load_system(path)
     assert str(err.value).startswith(str(path)) and all(p in str(err.value) for p in phrases), err.value

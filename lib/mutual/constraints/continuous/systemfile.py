@@ -64,6 +64,9 @@ def _system(keys, spec, path):
     if named and n != len(named[1]):
         state.fail("low", f"system {spec!r} has {len(named[1])} coordinates ({', '.join(named[1])}), got {n}")
     defaults = named[1:] if named else (None, None, (), None, None)
+    for table, what in ((state, f"its {n} state coordinates"), (control, "its controls")):
+        if not named and "names" not in table.mapping:
+            table.fail("names", f"missing: a system given as 'module:function' names {what} (a list of names)")
     names = state.texts("names", n, list(defaults[0]) if named else None)
     units = state.texts("units", n, list(defaults[1]) if named else [""] * n)
     periodic = state.texts("periodic", None, list(defaults[2]))
