@@ -125,20 +125,26 @@ def test_the_limits_in_force_apply_inside_their_block_only(monkeypatch):
 
 
 def test_a_request_let_through_is_said_when_it_is_long_or_large(monkeypatch):
-    """Inside limits(say=...): a request above NOTICE_SECONDS or NOTICE_BYTES is said once, before it starts,
-    whether the limits or allow_large let it through; a small one is not; a refused one raises without a word."""
+    """Inside limits(say=...): a request above NOTICE_SECONDS or NOTICE_BYTES is said, before it starts, whether
+    the limits or allow_large let it through, unless one said before needs as much time and memory (its part, or
+    a repeat); a small one is not; a refused one raises without a word."""
     monkeypatch.setattr(budget, "available_bytes", lambda: 2 ** 40)
     small = budget.Estimate("a small request", 2 ** 20, 1.0, "ask for less")
     large = budget.Estimate("a large request", 4 * 2 ** 30, 1.0, "ask for less")
+    part = budget.Estimate("a part of it", 2 ** 30, 600.0, "ask for less")
     said = []
     with budget.limits(minutes=120, say=said.append):
         budget.check(small)
         budget.check(BIG)
         budget.check(large)
+        budget.check(part)
+        budget.check(BIG)
     assert said == ["a big request: about 10 GiB of memory and 1 hours (estimated before starting; 1.02e+03 GiB are "
-                    "available, the limit is 120 minutes)",
-                    "a large request: about 4 GiB of memory and 1 s (estimated before starting; 1.02e+03 GiB are "
                     "available, the limit is 120 minutes)"]
+    with budget.limits(minutes=120, say=said.append):
+        budget.check(large)
+    assert said[-1] == ("a large request: about 4 GiB of memory and 1 s (estimated before starting; 1.02e+03 GiB "
+                        "are available, the limit is 120 minutes)")
     with budget.limits(minutes=30, say=said.append):
         with pytest.raises(budget.TooLarge):
             budget.check(BIG)

@@ -1,6 +1,7 @@
 """mutual.jax_cache: importing mutual turns on JAX's persistent compilation cache in the
 compendium's cache folder; a second process loads what the first compiled."""
 
+import functools
 import os
 import subprocess
 import sys
@@ -74,8 +75,8 @@ print(float(f(jnp.float32(2.0))), float(g(jnp.float32(2.0))))
 """
 
 
-def _programs(env):
-    out = subprocess.run([sys.executable, "-c", SWAPPED], capture_output=True, text=True, env=env, check=True)
+def _programs(env, program=SWAPPED):
+    out = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, env=env, check=True)
     return tuple(float(v) for v in out.stdout.split()), out.stderr
 
 
@@ -89,18 +90,22 @@ def _swap(a, b):
     b.write_bytes(data)
 
 
+@pytest.mark.parametrize("first", ["jax", "mutual"])  # mutual first: JAX's cache module is wrapped as it loads
 @pytest.mark.parametrize("how", ["entries swapped", "an entry without its authentication code"])
-def test_a_replaced_compiled_program_is_never_run(tmp_path, how):
+def test_a_replaced_compiled_program_is_never_run(tmp_path, how, first):
     env = _env(MUTUAL_CACHE_DIR=str(tmp_path))
-    assert _programs(env)[0] == (1.5, 2.5)
+    program = SWAPPED if first == "jax" else SWAPPED.replace("import jax, jax.numpy as jnp, mutual",
+                                                             "import mutual\nimport jax, jax.numpy as jnp")
+    run = functools.partial(_programs, program=program)
+    assert run(env)[0] == (1.5, 2.5)
     first, second = _lambdas(tmp_path)
     if how == "entries swapped":
         _swap(first, second)
     else:                                   # JAX's own format, as anyone without the key could write it
         first.write_bytes(second.read_bytes()[32:])
-    values, err = _programs(env)
+    values, err = run(env)
     assert values == (1.5, 2.5) and "does not verify" in err and "not run" in err
-    values, err = _programs(env)            # healed: compiled anew and stored with its code
+    values, err = run(env)                  # healed: compiled anew and stored with its code
     assert values == (1.5, 2.5) and "does not verify" not in err
 
 

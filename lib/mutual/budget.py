@@ -150,23 +150,24 @@ def command_line_minutes(environ=os.environ):
 def limits(minutes=None, allow_large=False, flag=None, say=None):
     """State the limits for the checks made inside the block (module docstring). ``flag``: how the
     refusal tells the user to go ahead (the command line's ``--allow-large``); ``say``: called with one line
-    for each request let through whose estimate exceeds NOTICE_SECONDS or NOTICE_BYTES, before it starts
-    (once per request, however often it is checked)."""
-    token = _LIMITS.set((minutes, bool(allow_large), flag, None if say is None else _once(say)))
+    for each request let through whose estimate exceeds NOTICE_SECONDS or NOTICE_BYTES, before it starts, unless
+    one said before in the block needs as much time and memory (a part of it, or a repeat)."""
+    token = _LIMITS.set((minutes, bool(allow_large), flag, None if say is None else _larger(say)))
     try:
         yield
     finally:
         _LIMITS.reset(token)
 
 
-def _once(say):
-    said = set()
+def _larger(say):
+    """``say(estimate, line)`` for an estimate larger (in time and memory) than every one said before."""
+    said = []
 
-    def once(line):
-        if line not in said:
-            said.add(line)
+    def larger(estimate, line):
+        if all(estimate.seconds > e.seconds or estimate.bytes > e.bytes for e in said):
+            said.append(estimate)
             say(line)
-    return once
+    return larger
 
 
 def _state():
@@ -192,7 +193,7 @@ def check(estimate, allow_large=None, minutes=None):
             raise TooLarge(estimate, f"the limit is {minutes:g} minutes")
     if say is not None and (estimate.seconds > NOTICE_SECONDS or estimate.bytes > NOTICE_BYTES):
         limit = f", the limit is {minutes:g} minutes" if minutes is not None else ""
-        say(f"{estimate} (estimated before starting; {memory(free)} are available{limit})")
+        say(estimate, f"{estimate} (estimated before starting; {memory(free)} are available{limit})")
     return estimate
 
 

@@ -26,8 +26,9 @@ def _problem(horizon=10):
     return Problem(SYSTEM, GRID, [-3.0, 0.0, 3.0], 0.1, horizon, QuadraticReward([np.pi, 0], [1, 0.1], [0.0], [1, 1]))
 
 
-def _recorded(n=4, steps=10, seed=0, levels=(-3.0, 0.0, 3.0)):
-    """Forward recordings of the pendulum under random controls of ``levels`` (the set's), as the CSV table."""
+def _recorded(n=4, steps=10, seed=0, levels=(-3.0, 0.0, 3.0), noise=0.0):
+    """Forward recordings of the pendulum under random controls of ``levels`` (the set's), as the CSV table;
+    ``noise``: a random kick of that size (rad/s) to theta_dot after every step."""
     rng = np.random.default_rng(seed)
     x = np.column_stack([rng.uniform(-1, 1, n), rng.uniform(-1, 1, n)])
     rows = []
@@ -36,7 +37,7 @@ def _recorded(n=4, steps=10, seed=0, levels=(-3.0, 0.0, 3.0)):
         for d in range(n):
             rows.append({"demo": f"demo-{d:03d}", "t": round(0.1 * k, 10), "theta": x[d, 0], "theta_dot": x[d, 1],
                          "torque": u[d] if k < steps else np.nan})
-        x = GRID.wrap(integrate(SYSTEM, x, u[:, None], 0.1))
+        x = GRID.wrap(integrate(SYSTEM, x, u[:, None], 0.1) + [0.0, 1.0] * rng.normal(0, noise, (n, 1)))
     return pd.DataFrame(rows)
 
 
@@ -81,7 +82,18 @@ WARNED = [  # (case, the recording, phrases of the warning)
     ("torque in kN m", GOOD.assign(torque=GOOD["torque"] / 1000),
      ["column 'torque'", "do not explain the recorded motion", "'torque' about 1000 times the recorded one"]),
     ("torque with its sign reversed", GOOD.assign(torque=-GOOD["torque"]),
-     ["'torque' about -1 times the recorded one (its sign looks reversed)", "check the unit and the sign"]),
+     ["'torque' about -1 times the recorded one (its sign looks reversed)", "check the units, signs and columns"]),
+    ("torque with an offset", GOOD.assign(torque=GOOD["torque"] + 1.5),
+     ["'torque' about 1 times the recorded one plus -1.5"]),
+    ("each torque on the row after its step", GOOD.assign(torque=GOOD.groupby("demo")["torque"].shift(1)),
+     ["the steps follow the control recorded one row later", "each row's control acts from its t to the next"]),
+    ("each torque on the row before its step", GOOD.assign(torque=GOOD.groupby("demo")["torque"].shift(-1)),
+     ["the steps follow the control recorded one row earlier"]),
+    ("every torque written as 0", GOOD.assign(torque=GOOD["torque"].where(GOOD["torque"].isna(), 0.0)),
+     ["every recorded control is 0, but the motion needs others", "were missing values written as 0?"]),
+    ("a sample at the box's edge", GOOD.assign(theta_dot=GOOD["theta_dot"].where(GOOD.index != 9, 7.9)),
+     ["column 'theta_dot'", "reach the edge of the box, up to 7.9 (high = 8), within a quarter cell",
+      "widen [state] low/high"]),
     ("torque normalised to [-1, 1]", GOOD.assign(torque=GOOD["torque"] / 3), ["'torque' about 3 times the recorded one"]),
 ]
 
@@ -100,6 +112,8 @@ def test_likely_unit_mistakes_are_warned_about(case, data, phrases, tmp_path):
     ("torques slightly beyond the set, as they acted", _recorded(levels=(-4.5, 0.0, 4.5))),
     ("torques recorded with a little noise",
      GOOD.assign(torque=GOOD["torque"] + np.random.default_rng(1).normal(0, 0.1, len(GOOD)))),
+    ("motion with process noise as large as a torque's step",
+     _recorded(noise=0.3)),
     ("exactly the horizon", GOOD),
     ("angles that wind past the box by less than a turn", GOOD.assign(theta=GOOD["theta"] + 2 * np.pi)),
 ])
@@ -161,10 +175,10 @@ def test_a_two_dimensional_control_set_is_read(tmp_path):
     assert problem.system.file == str((tmp_path / "planar.py").resolve())
 
 
-def test_one_control_of_two_with_its_sign_reversed_is_named_alone(tmp_path):
+def test_one_control_of_two_with_its_sign_reversed_or_the_columns_exchanged_are_named(tmp_path):
     """The planar system moves by u dt: recordings made with controls of the set (the zero control where a step
-    would leave the box), then 'vy' negated in the file; the warning names 'vy' (about -1 times) and not 'vx'
-    (whose recorded values explain the steps)."""
+    would leave the box), then 'vy' negated in the file: the warning names 'vy' (about -1 times) and not 'vx'
+    (whose recorded values explain the steps); then the two columns' names exchanged: both are named."""
     problem = load_system(_system(tmp_path)).problem
     rng = np.random.default_rng(3)
     x, rows = np.tile([1.5, 1.0], (3, 1)), []
@@ -181,6 +195,12 @@ def test_one_control_of_two_with_its_sign_reversed_is_named_alone(tmp_path):
     message = " ".join(str(w.message) for w in record)
     assert "columns 'vx', 'vy'" in message and "'vy' about -1 times the recorded one" in message, message
     assert "'vx' about" not in message, message
+    frame = pd.read_csv(path).rename(columns={"vx": "vy", "vy": "vx"})       # the columns' names exchanged
+    frame.assign(vx=-frame["vx"]).to_csv(path, index=False)                  # (and the sign put right)
+    with pytest.warns(InputWarning) as record:
+        check_recording(problem, read_recording(path, problem.system.state_names, problem.system.control_names))
+    message = " ".join(str(w.message) for w in record)
+    assert "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'" in message, message
 
 
 SYSTEM_MISTAKES = [  # (case, spec, [control] values, [simulate] start, phrases of the error)
@@ -263,8 +283,8 @@ def test_the_cli_names_the_system_file_for_a_failure_inside_the_dynamics(tmp_pat
     path = _system(tmp_path, "fails_later:f")
     status = main(["constraints", "infer-continuous", str(trajectories), "--system", str(path), "--inline",
                    "--rounds", "1", "--out", str(tmp_path / "o"), "--no-progress"])
-    err = capsys.readouterr().err
-    assert status == 2 and err.startswith(f"mutual constraints infer-continuous: error: {path}: key 'system': ")
+    err = capsys.readouterr().err                       # (after a warning: the recording rides the box's edge)
+    assert status == 2 and f"mutual constraints infer-continuous: error: {path}: key 'system': " in err
     assert "fails_later.py" in err and "raised ArithmeticError: left the table at line 4 of" in err
 
 

@@ -22,7 +22,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..demonstrations import Demonstrations
-from .recordings import align, check_plausible
+from .plausible import check_plausible
+from .recordings import align
 
 SUPPORT_WEIGHT = 1e-3
 
@@ -107,7 +108,7 @@ def _with_support(transitions, rows, cols, n_actions):
 
 def check_recording(problem, recording, truncate=False):
     """Align ``recording`` to the time step and check its states lie in the box and are plausible
-    (:func:`.recordings.check_plausible`): the errors of :func:`to_demonstrations` that need no
+    (:func:`.plausible.check_plausible`): the errors of :func:`to_demonstrations` that need no
     discretization, for an early report."""
     states, controls, index = align(recording, problem.dt, truncate)
     check_box(problem.grid, recording, states, index)

@@ -7,7 +7,8 @@ together or not: they are ordered by ``t``), ``t`` is in seconds, sampled at a r
 control may be empty where it was not recorded, and is ignored on each demonstration's last row.
 
 :func:`align` keeps every k-th sample so that steps are ``dt`` apart (the period must divide ``dt``);
-:mod:`.mapping` then maps the states to cells and the steps to actions.
+:mod:`.plausible` then checks what a user may have got wrong, and :mod:`.mapping` maps the states to cells
+and the steps to actions.
 """
 
 from dataclasses import dataclass, field
@@ -16,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from ...atomic import atomic_path
-from ...inputs import angle_unit_warning, name_column, number_column, read_csv, warn
+from ...inputs import name_column, number_column, read_csv
 
 _TOLERANCE = 1e-6   # relative: equal sampling periods, a period dividing dt
 
@@ -160,115 +161,3 @@ def _step_controls(C, picks, k, L):
         if len(window):
             out[i] = window.mean(axis=0)
     return out
-
-
-def check_plausible(problem, recording, states, controls, index):
-    """What a user gets wrong in recordings that still read, for the aligned ``states`` (N, L+1, n), ``controls``
-    (N, L, m) or None and sample ``index`` of :func:`align`: demonstrations longer than the horizon and time that
-    runs backwards are refused; angles that look like degrees, recorded controls far outside the control set and
-    recorded controls that do not explain the recorded motion are warned about (:class:`mutual.inputs.InputWarning`)."""
-    L = states.shape[1] - 1
-    if L > problem.horizon:
-        raise ValueError(f"{recording.where(0, index[0, -1], 't')}: the demonstrations span {L} steps of dt = "
-                         f"{problem.dt:g} s, more than the horizon T = {problem.horizon} of the system ([time] "
-                         f"horizon); raise the horizon to at least {L}, or trim the recordings")
-    grid = problem.grid
-    for i in np.flatnonzero(grid.periodic):
-        message = angle_unit_warning([s[:, i] for s in recording.states], f"{recording.source}, column "
-                                     f"{grid.names[i]!r} (periodic, radians)", grid.low[i], grid.high[i],
-                                     times=recording.times)
-        if message:
-            warn(message)
-    if recording.controls is not None and not _check_control_range(problem, recording):
-        _check_control_motion(problem, recording, states, controls)
-    _check_time_direction(problem, recording, states)
-
-
-def _check_control_range(problem, recording):
-    """Warn about recorded controls more than the control set's width outside it (each is snapped to its edge);
-    True if it warned."""
-    names, warned = problem.system.control_names, False
-    for j, name in enumerate(names):
-        lo, hi = problem.controls[:, j].min(), problem.controls[:, j].max()
-        width = hi - lo if hi > lo else max(abs(lo), 1.0)
-        far = [np.flatnonzero((c[:, j] < lo - width) | (c[:, j] > hi + width)) for c in recording.controls]
-        count = sum(f.size for f in far)
-        if count:
-            d = next(k for k, f in enumerate(far) if f.size)
-            total = sum(int(np.isfinite(c[:, j]).sum()) for c in recording.controls)
-            top = max(float(np.nanmax(np.abs(c[:, j]))) for c in recording.controls)
-            warn(f"{recording.where(d, far[d][0], name)}: {count} of {total} recorded {name!r} values lie more than "
-                 f"the control set's width outside it ([{lo:g}, {hi:g}]; up to {top:.4g} in magnitude); each is "
-                 "snapped to the nearest control of the set, so check the unit (or widen [control] values)")
-            warned = True
-    return warned
-
-
-def _check_control_motion(problem, recording, states, controls, most=2000):
-    """Warn when the recorded controls do not explain the recorded motion: on more than a quarter of the steps, a
-    step taken with the recorded control misses the next state by more than twice the best control's miss and
-    by more than a quarter of the spread between the set's predictions. A unit or sign mistake that stays
-    inside the set (kN m for N m, a reversed sign) shows so; the least-squares factor between the best
-    controls and the recorded ones names it, per control."""
-    n, m = states.shape[2], controls.shape[2]
-    x, nxt, u = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n), controls.reshape(-1, m)
-    recorded = np.flatnonzero(np.isfinite(u).all(axis=1))
-    if recorded.size < 10:
-        return
-    pick = recorded[np.linspace(0, recorded.size - 1, min(most, recorded.size)).astype(int)]
-    grid = problem.grid
-    x, nxt, u = grid.wrap(x[pick]), grid.wrap(nxt[pick]), u[pick]
-    own, miss = _distance(grid, problem.step(x, u), nxt), _misses(problem, x, nxt)
-    best, spread = miss.min(axis=1), miss.max(axis=1) - miss.min(axis=1)
-    wrong = own > np.maximum(np.maximum(2 * best, 0.25 * spread), 1e-6)
-    if not wrong.mean() > 0.25:
-        return
-    names, fitted = problem.system.control_names, problem.controls[miss.argmin(axis=1)]
-    factor = (fitted * u).sum(axis=0) / np.maximum((u * u).sum(axis=0), 1e-300)
-    off = [f"{name!r} about {a:.4g} times the recorded one{' (its sign looks reversed)' if a < 0 else ''}"
-           for name, a in zip(names, factor) if not 0.8 <= a <= 1.25]
-    hint = ("the controls that explain the steps are " + ", ".join(off) + ": check the unit and the sign"
-            if off else "check the system's [parameters] and that each row's control acts from its t to the next row's")
-    where = f"column {names[0]!r}" if m == 1 else "columns " + ", ".join(map(repr, names))
-    warn(f"{recording.source}, {where}: the recorded controls do not explain the recorded motion: on "
-         f"{wrong.mean():.0%} of the steps a step with the recorded control misses the next state by "
-         f"{np.median(own[wrong]):.3g} cell widths (median), a step with the best control of the set by "
-         f"{np.median(best[wrong]):.2g}; {hint}")
-
-
-def _distance(grid, a, b):
-    """Distances (in cell widths, periodic coordinates the short way round) between states a (..., n) and b."""
-    diff = a - b
-    for i in np.flatnonzero(grid.periodic):
-        period = grid.high[i] - grid.low[i]
-        diff[..., i] = np.mod(diff[..., i] + period / 2, period) - period / 2
-    scale = np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
-    return np.sqrt(((diff / scale) ** 2).sum(axis=-1))
-
-
-def _misses(problem, x, nxt):
-    """(k, A): each control's one-step prediction's distance from the states x (k, n) to nxt (k, n), in cell widths."""
-    A = problem.n_actions
-    pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
-    return _distance(problem.grid, pred, nxt[:, None, :])
-
-
-def _check_time_direction(problem, recording, states, most=2000):
-    """Refuse recordings whose states, in the order of t, follow the dynamics backwards: each step's best one-step
-    prediction misses the next state by more than half the step, while a step taken from the next state lands
-    on the previous one (a quarter of that miss or nearer)."""
-    n = states.shape[2]
-    x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
-    pick = np.linspace(0, len(x) - 1, min(most, len(x))).astype(int)
-    x, nxt = problem.grid.wrap(x[pick]), problem.grid.wrap(nxt[pick])
-    forward = float(np.median(_misses(problem, x, nxt).min(axis=1)))
-    step = float(np.median(_distance(problem.grid, nxt, x)))
-    if not forward > max(0.5 * step, 0.05):           # the dynamics explain the steps (or nothing moves)
-        return
-    backward = float(np.median(_misses(problem, nxt, x).min(axis=1)))
-    if backward < 0.25 * forward:
-        raise ValueError(f"{recording.source}, column 't': the recorded motion runs backwards in time: in the order "
-                         f"of t, the dynamics' best one-step prediction misses the next state by {forward:.3g} cell "
-                         f"widths (median; the steps are {step:.3g}), but a step from the next state lands "
-                         f"{backward:.3g} from the previous one; t seems to decrease along the motion (a time-to-go, "
-                         "or its sign): make t increase as the motion goes")

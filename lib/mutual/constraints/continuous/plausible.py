@@ -1,0 +1,206 @@
+"""What a user gets wrong in recordings that still read (:func:`check_plausible`): refused or warned about.
+
+Refused: demonstrations longer than the horizon; time that runs backwards (the states follow the dynamics
+backwards). Warned about (:class:`mutual.inputs.InputWarning`): periodic angles that look like degrees;
+recorded controls far outside the control set; recorded controls that do not explain the recorded motion
+(a unit, a sign, exchanged columns, a shift by one row, or zeros for missing values); demonstrations that
+reach the edge of the box. Distances between states are in cell widths (periodic coordinates the short way).
+"""
+
+import numpy as np
+
+from ...inputs import angle_unit_warning, warn
+
+
+def check_plausible(problem, recording, states, controls, index):
+    """The module docstring's checks of ``recording``, given its aligned ``states`` (N, L+1, n), ``controls``
+    (N, L, m) or None and sample ``index`` (:func:`.recordings.align`): a ValueError or warnings."""
+    L = states.shape[1] - 1
+    if L > problem.horizon:
+        raise ValueError(f"{recording.where(0, index[0, -1], 't')}: the demonstrations span {L} steps of dt = "
+                         f"{problem.dt:g} s, more than the horizon T = {problem.horizon} of the system ([time] "
+                         f"horizon); raise the horizon to at least {L}, or trim the recordings")
+    grid = problem.grid
+    for i in np.flatnonzero(grid.periodic):
+        message = angle_unit_warning([s[:, i] for s in recording.states], f"{recording.source}, column "
+                                     f"{grid.names[i]!r} (periodic, radians)", grid.low[i], grid.high[i],
+                                     times=recording.times)
+        if message:
+            warn(message)
+    if recording.controls is not None:
+        _check_control_range(problem, recording)
+        _check_control_motion(problem, recording, states, controls)
+    _check_box_edges(problem, recording, states)
+    _check_time_direction(problem, recording, states)
+
+
+def _check_box_edges(problem, recording, states):
+    """Warn where the demonstrations reach an edge of the box on a coordinate that does not wrap (within a
+    quarter of its narrowest cell): the box may be what holds them there, and a bound found there cannot be
+    told from the box's own edge."""
+    grid = problem.grid
+    flat = states.reshape(-1, grid.ndim)
+    for i in np.flatnonzero(~np.asarray(grid.periodic)):
+        near = 0.25 * np.min(grid.widths_1d(i))
+        low, high = flat[:, i].min(), flat[:, i].max()
+        reached = [f"down to {low:.6g} (low = {grid.low[i]:g})"] if low - grid.low[i] < near else []
+        reached += [f"up to {high:.6g} (high = {grid.high[i]:g})"] if grid.high[i] - high < near else []
+        if reached:
+            warn(f"{recording.source}, column {grid.names[i]!r}: the demonstrations reach the edge of the box, "
+                 f"{' and '.join(reached)}, within a quarter cell: the box may be what holds them there, and a bound "
+                 "found there cannot be told from the box's edge; widen [state] low/high to see what limits them")
+
+
+def _check_control_range(problem, recording):
+    """Warn about recorded controls more than the control set's width outside it (each is snapped to its edge)."""
+    names = problem.system.control_names
+    for j, name in enumerate(names):
+        lo, hi = problem.controls[:, j].min(), problem.controls[:, j].max()
+        width = hi - lo if hi > lo else max(abs(lo), 1.0)
+        far = [np.flatnonzero((c[:, j] < lo - width) | (c[:, j] > hi + width)) for c in recording.controls]
+        count = sum(f.size for f in far)
+        if count:
+            d = next(k for k, f in enumerate(far) if f.size)
+            total = sum(int(np.isfinite(c[:, j]).sum()) for c in recording.controls)
+            top = max(float(np.nanmax(np.abs(c[:, j]))) for c in recording.controls)
+            warn(f"{recording.where(d, far[d][0], name)}: {count} of {total} recorded {name!r} values lie more than "
+                 f"the control set's width outside it ([{lo:g}, {hi:g}]; up to {top:.4g} in magnitude); each is "
+                 "snapped to the nearest control of the set, so check the unit (or widen [control] values)")
+
+
+def _check_control_motion(problem, recording, states, controls, most=4000):
+    """Warn when the recorded controls do not explain the recorded motion: one step is close to linear in the
+    control, so the linear map M (m x m) for which steps with M u best explain the motion is fitted by least
+    squares, with an offset c (and steps with the controls one row earlier or later are tried); when one of them
+    cuts the mean squared miss of the next states to a quarter of what the controls as recorded give, M and c (a
+    factor per control, exchanged columns, an offset) or the shift is named. Every recorded control 0 is said
+    apart (missing values written as 0?)."""
+    N, L, m = controls.shape
+    keep = max(1, min(N, most // max(L, 1)))
+    states, controls = states[:keep], controls[:keep]
+    names = problem.system.control_names
+    where = f"column {names[0]!r}" if m == 1 else "columns " + ", ".join(map(repr, names))
+    u = controls.reshape(-1, m)
+    if np.isfinite(u).all(axis=1).sum() < 4 * (m * m + m):     # too few steps to fit M and c
+        return
+    recorded = _mean_miss(problem, states, controls)
+    if not recorded > 1e-12:
+        return
+    if np.all(u[np.isfinite(u).all(axis=1)] == 0):
+        best = _mean_miss(problem, states, None)
+        if 4 * best < recorded:
+            warn(f"{recording.source}, {where}: every recorded control is 0, but the motion needs others (a step "
+                 f"with the best control of the set misses the next state by {np.sqrt(best):.3g} cell widths, rms; "
+                 f"with 0 by {np.sqrt(recorded):.3g}): were missing values written as 0? leave them empty")
+        return
+    M, c = _control_map(problem, states, controls)
+    fits = {"mapped": (_mean_miss(problem, states, controls @ M.T + c), recorded)}   # (with the change, as recorded)
+    if L > 1:      # step k under the control of row k - 1 (shift -1) or k + 1 (shift 1), on the steps both have
+        late, early = states[:, 1:], states[:, :-1]
+        fits[-1] = (_mean_miss(problem, late, controls[:, :-1]), _mean_miss(problem, late, controls[:, 1:]))
+        fits[1] = (_mean_miss(problem, early, controls[:, 1:]), _mean_miss(problem, early, controls[:, :-1]))
+    cut = {k: mine / max(changed, 1e-300) for k, (changed, mine) in fits.items()}
+    best = max(cut, key=cut.get)
+    if cut[best] < 4:
+        return
+    if best == "mapped":
+        changed = _describe(M, c, np.ptp(problem.controls, axis=0), names)
+        hint = f"the controls that explain the steps are {changed}: check the units, signs and columns"
+    else:
+        hint = (f"the steps follow the control recorded one row {'later' if best > 0 else 'earlier'}: each row's "
+                "control acts from its t to the next row's t")
+    warn(f"{recording.source}, {where}: the recorded controls do not explain the recorded motion: steps with them "
+         f"miss the next state by {np.sqrt(fits[best][1]):.3g} cell widths (rms), steps with the fitted ones by "
+         f"{np.sqrt(fits[best][0]):.2g}; {hint}")
+
+
+def _mean_miss(problem, states, controls):
+    """The mean squared miss (cell widths) of one step from states[:, k] under controls[:, k] to states[:, k + 1]
+    over the recorded steps; controls None: under the best control of the set, step by step."""
+    n = states.shape[2]
+    x, nxt = problem.grid.wrap(states[:, :-1].reshape(-1, n)), problem.grid.wrap(states[:, 1:].reshape(-1, n))
+    if controls is None:
+        return float(np.mean(_misses(problem, x, nxt).min(axis=1) ** 2))
+    u = controls.reshape(len(x), -1)
+    ok = np.isfinite(u).all(axis=1)
+    return float(np.mean(_distance(problem.grid, problem.step(x[ok], u[ok]), nxt[ok]) ** 2)) if ok.any() else 0.0
+
+
+def _control_map(problem, states, controls):
+    """``(M, c)``: the m x m map and the offset (where the recorded values vary) minimising the linearised miss
+    of steps under M u + c, x' ~ step(x, 0) + B(x) (M u + c), with B(x)'s columns the steps' responses to each
+    control at the size of the set's range."""
+    n, m = states.shape[2], controls.shape[2]
+    grid = problem.grid
+    x, nxt = grid.wrap(states[:, :-1].reshape(-1, n)), grid.wrap(states[:, 1:].reshape(-1, n))
+    u = controls.reshape(len(x), m)
+    ok = np.isfinite(u).all(axis=1)
+    x, nxt, u = x[ok], nxt[ok], u[ok]
+    span = np.ptp(problem.controls, axis=0)
+    span[span == 0] = 1.0
+    base = problem.step(x, np.zeros_like(u))
+    B = np.stack([_difference(grid, problem.step(x, np.outer(np.ones(len(x)), span[j] * np.eye(m)[j])), base)
+                  / span[j] for j in range(m)], axis=2)                      # (k, n, m), in cell widths per unit
+    vary = np.ptp(u, axis=0) > 0                    # an offset only where the recorded values vary (else: M alone)
+    design = np.concatenate([(B[:, :, :, None] * u[:, None, None, :]).reshape(len(x), n, m * m), B[:, :, vary]], 2)
+    fit = np.linalg.lstsq(design.reshape(len(x) * n, -1), _difference(grid, nxt, base).ravel(), rcond=None)[0]
+    offset = np.zeros(m)
+    offset[vary] = fit[m * m:]
+    return fit[:m * m].reshape(m, m), offset
+
+
+def _describe(M, c, span, names):
+    """``'torque' about 1000 times the recorded one``, ``'vx' about 1 times the recorded 'vy'`` (the largest
+    entry of each row), ``plus 1.5`` (an offset beyond a tenth of the set's range), for the controls changed."""
+    out = []
+    for i, row in enumerate(M):
+        j = int(np.argmax(np.abs(row)))
+        offset = f" plus {c[i]:.3g}" if abs(c[i]) > 0.1 * span[i] else ""
+        if j == i and 0.8 <= row[j] <= 1.25 and not offset:
+            continue
+        one = "one" if j == i else repr(names[j])
+        sign = " (its sign looks reversed)" if j == i and row[j] < 0 else ""
+        out.append(f"{names[i]!r} about {row[j] + 0.0:.4g} times the recorded {one}{offset}{sign}")
+    return ", ".join(out) or "close to the recorded ones"
+
+
+def _difference(grid, a, b):
+    """a - b in cell widths, periodic coordinates the short way round."""
+    diff = a - b
+    for i in np.flatnonzero(grid.periodic):
+        period = grid.high[i] - grid.low[i]
+        diff[..., i] = np.mod(diff[..., i] + period / 2, period) - period / 2
+    return diff / np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
+
+
+def _distance(grid, a, b):
+    """Distances (in cell widths, periodic coordinates the short way round) between states a (..., n) and b."""
+    return np.sqrt((_difference(grid, a, b) ** 2).sum(axis=-1))
+
+
+def _misses(problem, x, nxt):
+    """(k, A): each control's one-step prediction's distance from the states x (k, n) to nxt (k, n), in cell widths."""
+    A = problem.n_actions
+    pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
+    return _distance(problem.grid, pred, nxt[:, None, :])
+
+
+def _check_time_direction(problem, recording, states, most=2000):
+    """Refuse recordings whose states, in the order of t, follow the dynamics backwards: each step's best one-step
+    prediction misses the next state by more than half the step, while a step taken from the next state lands
+    on the previous one (a quarter of that miss or nearer)."""
+    n = states.shape[2]
+    x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
+    pick = np.linspace(0, len(x) - 1, min(most, len(x))).astype(int)
+    x, nxt = problem.grid.wrap(x[pick]), problem.grid.wrap(nxt[pick])
+    forward = float(np.median(_misses(problem, x, nxt).min(axis=1)))
+    step = float(np.median(_distance(problem.grid, nxt, x)))
+    if not forward > max(0.5 * step, 0.05):           # the dynamics explain the steps (or nothing moves)
+        return
+    backward = float(np.median(_misses(problem, nxt, x).min(axis=1)))
+    if backward < 0.25 * forward:
+        raise ValueError(f"{recording.source}, column 't': the recorded motion runs backwards in time: in the order "
+                         f"of t, the dynamics' best one-step prediction misses the next state by {forward:.3g} cell "
+                         f"widths (median; the steps are {step:.3g}), but a step from the next state lands "
+                         f"{backward:.3g} from the previous one; t seems to decrease along the motion (a time-to-go, "
+                         "or its sign): make t increase as the motion goes")
