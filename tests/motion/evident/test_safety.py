@@ -31,8 +31,8 @@ def test_legible_cost_is_the_linear_combination_of_the_hypotheses():
 
 def test_lq_form_of_figure_7_1_costs_matches_the_feature_costs():
     """Chapter 6's QuadraticCost (numpy) and our JAX feature cost agree on random controls."""
-    task, w0, w1 = es.figure_scenario("7.1", steps=40)
-    us = np.random.default_rng(4).normal(size=(40, 2))
+    task, w0, w1 = es.figure_scenario("7.1", steps=30)
+    us = np.random.default_rng(4).normal(size=(30, 2))
     xs = task.x0 + task.dt * np.vstack([np.zeros(2), np.cumsum(us, axis=0)])
     weights = es.hypothesis_set(w0, w1)
     for name, cost in es.lq_hypothesis_costs(task, w0, w1).items():
@@ -40,7 +40,7 @@ def test_lq_form_of_figure_7_1_costs_matches_the_feature_costs():
 
 
 def test_figure_7_1_ilqr_equals_chapter_6_riccati_solution_in_one_step():
-    task, w0, w1 = es.figure_scenario("7.1", steps=60)
+    task, w0, w1 = es.figure_scenario("7.1", steps=30)
     results = es.solve_hypotheses(task, w0, w1)
     for name, cost in es.lq_hypothesis_costs(task, w0, w1).items():
         exact = solve_riccati(single_integrator(2, task.dt), cost, task.x0, task.steps)
@@ -51,7 +51,7 @@ def test_figure_7_1_ilqr_equals_chapter_6_riccati_solution_in_one_step():
 
 def test_unbounded_legible_objective_is_reported_by_both_solvers():
     """With a tiny alpha the hazard reward (1 + alpha) / alpha a3 beats the effort cost over T = 5."""
-    task, w0, w1 = es.figure_scenario("7.1", steps=60)
+    task, w0, w1 = es.figure_scenario("7.1", steps=30)
     alpha = 0.02
     with pytest.raises(ValueError, match="unbounded"):
         solve_riccati(single_integrator(2, task.dt), es.lq_hypothesis_costs(task, w0, w1, alpha)["legible"],
@@ -111,7 +111,7 @@ def test_figure_6_1_uses_the_bicycle():
 def test_hazard_feature_orders_the_optima_of_fig_7_1():
     """Comparing exact optima under both costs: J1 = J0 - a3 F forces F(H0) <= F(H1) <= F(legible) (LQ: global)."""
     from mutual.motion.evident import scans
-    task, w0, w1 = es.figure_scenario("7.1", steps=40)
+    task, w0, w1 = es.figure_scenario("7.1", steps=30)
     paths = es.solve_hypotheses(task, w0, w1)
     f = {k: scans.hazard_feature(r.xs, task.hazard, task.dt) for k, r in paths.items()}
     assert f["H0"] < f["H1"] < f["legible"]
