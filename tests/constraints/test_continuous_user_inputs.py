@@ -84,17 +84,18 @@ WARNED = [  # (case, the recording, phrases of the warning)
     ("torque with its sign reversed", GOOD.assign(torque=-GOOD["torque"]),
      ["'torque' about -1 times the recorded one (its sign looks reversed)", "check the units, signs and columns"]),
     ("torque with an offset", GOOD.assign(torque=GOOD["torque"] + 1.5),
-     ["'torque' about 1 times the recorded one plus -1.5"]),
+     ["'torque' about 1 times the recorded one minus 1.5"]),
     ("each torque on the row after its step", GOOD.assign(torque=GOOD.groupby("demo")["torque"].shift(1)),
-     ["the steps follow the control recorded one row later", "each row's control acts from its t to the next"]),
+     ["the steps follow the control recorded one step (dt = 0.1 s) later", "each row's control acts from its t on"]),
     ("each torque on the row before its step", GOOD.assign(torque=GOOD.groupby("demo")["torque"].shift(-1)),
-     ["the steps follow the control recorded one row earlier"]),
+     ["the steps follow the control recorded one step (dt = 0.1 s) earlier"]),
     ("every torque written as 0", GOOD.assign(torque=GOOD["torque"].where(GOOD["torque"].isna(), 0.0)),
      ["every recorded control is 0, but the motion needs others", "were missing values written as 0?"]),
     ("a sample at the box's edge", GOOD.assign(theta_dot=GOOD["theta_dot"].where(GOOD.index != 9, 7.9)),
      ["column 'theta_dot'", "reach the edge of the box, up to 7.9 (high = 8), within a quarter cell",
       "widen [state] low/high"]),
-    ("torque normalised to [-1, 1]", GOOD.assign(torque=GOOD["torque"] / 3), ["'torque' about 3 times the recorded one"]),
+    ("torque normalised to [-1, 1]", GOOD.assign(torque=GOOD["torque"] / 3),
+     ["'torque' about 3 times the recorded one"]),
 ]
 
 
@@ -114,6 +115,8 @@ def test_likely_unit_mistakes_are_warned_about(case, data, phrases, tmp_path):
      GOOD.assign(torque=GOOD["torque"] + np.random.default_rng(1).normal(0, 0.1, len(GOOD)))),
     ("motion with process noise as large as a torque's step",
      _recorded(noise=0.3)),
+    ("a passive swing with process noise, every torque 0", _recorded(levels=(0.0,), noise=0.1)),
+    ("commanded torques recorded, twice the set's, the set's edge acted", GOOD.assign(torque=GOOD["torque"] * 2)),
     ("exactly the horizon", GOOD),
     ("angles that wind past the box by less than a turn", GOOD.assign(theta=GOOD["theta"] + 2 * np.pi)),
 ])

@@ -36,15 +36,15 @@ def check_plausible(problem, recording, states, controls, index):
 
 def _check_box_edges(problem, recording, states):
     """Warn where the demonstrations reach an edge of the box on a coordinate that does not wrap (within a
-    quarter of its narrowest cell): the box may be what holds them there, and a bound found there cannot be
+    quarter of the edge cell): the box may be what holds them there, and a bound found there cannot be
     told from the box's own edge."""
     grid = problem.grid
     flat = states.reshape(-1, grid.ndim)
     for i in np.flatnonzero(~np.asarray(grid.periodic)):
-        near = 0.25 * np.min(grid.widths_1d(i))
+        widths = grid.widths_1d(i)
         low, high = flat[:, i].min(), flat[:, i].max()
-        reached = [f"down to {low:.6g} (low = {grid.low[i]:g})"] if low - grid.low[i] < near else []
-        reached += [f"up to {high:.6g} (high = {grid.high[i]:g})"] if grid.high[i] - high < near else []
+        reached = [f"down to {low:.6g} (low = {grid.low[i]:g})"] if low - grid.low[i] < widths[0] / 4 else []
+        reached += [f"up to {high:.6g} (high = {grid.high[i]:g})"] if grid.high[i] - high < widths[-1] / 4 else []
         if reached:
             warn(f"{recording.source}, column {grid.names[i]!r}: the demonstrations reach the edge of the box, "
                  f"{' and '.join(reached)}, within a quarter cell: the box may be what holds them there, and a bound "
@@ -70,48 +70,69 @@ def _check_control_range(problem, recording):
 
 def _check_control_motion(problem, recording, states, controls, most=4000):
     """Warn when the recorded controls do not explain the recorded motion: one step is close to linear in the
-    control, so the linear map M (m x m) for which steps with M u best explain the motion is fitted by least
-    squares, with an offset c (and steps with the controls one row earlier or later are tried); when one of them
-    cuts the mean squared miss of the next states to a quarter of what the controls as recorded give, M and c (a
-    factor per control, exchanged columns, an offset) or the shift is named. Every recorded control 0 is said
-    apart (missing values written as 0?)."""
-    N, L, m = controls.shape
-    keep = max(1, min(N, most // max(L, 1)))
-    states, controls = states[:keep], controls[:keep]
-    names = problem.system.control_names
-    where = f"column {names[0]!r}" if m == 1 else "columns " + ", ".join(map(repr, names))
-    u = controls.reshape(-1, m)
-    if np.isfinite(u).all(axis=1).sum() < 4 * (m * m + m):     # too few steps to fit M and c
+    control, so the map M (m x m) and offset c for which steps under M u + c best explain the motion are fitted
+    by least squares (and steps under the control one step of dt earlier or later are tried); when one of them
+    cuts the mean squared miss of the next states to a quarter of what the controls as recorded give (clipped to
+    the set's range, as the models take them), and the miss is more than a fiftieth of a cell, what changed is
+    named: a factor per control, exchanged columns, an offset, or the shift. Every recorded control 0 while the
+    motion needs others is said apart (missing values written as 0?). One map for the whole file: a file whose
+    demonstrations were recorded in different units is not caught. Dynamics that fail on a control the check
+    tries leave it unsaid (the model's own steps report such a failure)."""
+    demos = _spread(len(states), most // max(states.shape[1], 1))
+    try:
+        message = _control_motion(problem, states[demos], controls[demos])
+    except ValueError:
         return
+    if message:
+        names = problem.system.control_names
+        where = f"column {names[0]!r}" if len(names) == 1 else "columns " + ", ".join(map(repr, names))
+        warn(f"{recording.source}, {where}: {message}")
+
+
+def _spread(n, keep):
+    """At most ``keep`` (at least 1) indices spread evenly over range(n)."""
+    return np.unique(np.linspace(0, n - 1, max(1, min(n, keep))).astype(int))
+
+
+def _control_motion(problem, states, controls):
+    """The warning's text of :func:`_check_control_motion`, or None."""
+    L, m = controls.shape[1], controls.shape[2]
+    low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
+    raw, controls = controls, np.clip(controls, low, high)     # what acted at most: the set's range
+    u = raw.reshape(-1, m)
+    u = u[np.isfinite(u).all(axis=1)]
+    if len(u) < 4 * (m * m + m):                               # too few steps to fit M and c
+        return None
     recorded = _mean_miss(problem, states, controls)
-    if not recorded > 1e-12:
-        return
-    if np.all(u[np.isfinite(u).all(axis=1)] == 0):
-        best = _mean_miss(problem, states, None)
-        if 4 * best < recorded:
-            warn(f"{recording.source}, {where}: every recorded control is 0, but the motion needs others (a step "
-                 f"with the best control of the set misses the next state by {np.sqrt(best):.3g} cell widths, rms; "
-                 f"with 0 by {np.sqrt(recorded):.3g}): were missing values written as 0? leave them empty")
-        return
-    M, c = _control_map(problem, states, controls)
-    fits = {"mapped": (_mean_miss(problem, states, controls @ M.T + c), recorded)}   # (with the change, as recorded)
-    if L > 1:      # step k under the control of row k - 1 (shift -1) or k + 1 (shift 1), on the steps both have
+    if not recorded > 0.02 ** 2:
+        return None
+    if np.all(u == 0):
+        best = _mean_miss(problem, states, None)               # each step's best control: fits noise too, so 16x
+        if 16 * best < recorded:
+            return (f"every recorded control is 0, but the motion needs others (a step with the best control of "
+                    f"the set misses the next state by {np.sqrt(best):.3g} cell widths, rms; with 0 by "
+                    f"{np.sqrt(recorded):.3g}): were missing values written as 0? leave them empty")
+        return None
+    fits, M, c = {}, *_control_map(problem, states, raw)
+    changed = None if M is None else _describe(M, c, high - low, problem.system.control_names)
+    if changed:
+        fits["mapped"] = (_mean_miss(problem, states, np.clip(raw @ M.T + c, low, high)), recorded)
+    if L > 1:      # step k under the control of step k - 1 (shift -1) or k + 1 (shift 1), on the steps both have
         late, early = states[:, 1:], states[:, :-1]
         fits[-1] = (_mean_miss(problem, late, controls[:, :-1]), _mean_miss(problem, late, controls[:, 1:]))
         fits[1] = (_mean_miss(problem, early, controls[:, 1:]), _mean_miss(problem, early, controls[:, :-1]))
-    cut = {k: mine / max(changed, 1e-300) for k, (changed, mine) in fits.items()}
-    best = max(cut, key=cut.get)
-    if cut[best] < 4:
-        return
+    cut = {k: mine / max(other, 1e-300) for k, (other, mine) in fits.items()}
+    best = max(cut, key=cut.get, default=None)
+    if best is None or cut[best] < 4:
+        return None
     if best == "mapped":
-        changed = _describe(M, c, np.ptp(problem.controls, axis=0), names)
-        hint = f"the controls that explain the steps are {changed}: check the units, signs and columns"
+        what, hint = "fitted", f"the controls that explain the steps are {changed}: check the units, signs and columns"
     else:
-        hint = (f"the steps follow the control recorded one row {'later' if best > 0 else 'earlier'}: each row's "
-                "control acts from its t to the next row's t")
-    warn(f"{recording.source}, {where}: the recorded controls do not explain the recorded motion: steps with them "
-         f"miss the next state by {np.sqrt(fits[best][1]):.3g} cell widths (rms), steps with the fitted ones by "
-         f"{np.sqrt(fits[best][0]):.2g}; {hint}")
+        what, hint = "shifted", (f"the steps follow the control recorded one step (dt = {problem.dt:g} s) "
+                                 f"{'later' if best > 0 else 'earlier'}: each row's control acts from its t on")
+    return (f"the recorded controls do not explain the recorded motion: steps with them miss the next state by "
+            f"{np.sqrt(fits[best][1]):.3g} cell widths (rms), steps with the {what} ones by "
+            f"{np.sqrt(fits[best][0]):.2g}; {hint}")
 
 
 def _mean_miss(problem, states, controls):
@@ -127,23 +148,27 @@ def _mean_miss(problem, states, controls):
 
 
 def _control_map(problem, states, controls):
-    """``(M, c)``: the m x m map and the offset (where the recorded values vary) minimising the linearised miss
-    of steps under M u + c, x' ~ step(x, 0) + B(x) (M u + c), with B(x)'s columns the steps' responses to each
-    control at the size of the set's range."""
+    """``(M, c)`` minimising the linearised miss of steps under M u + c: x' ~ step(x, u0) + B(x) (M u + c - u0)
+    about the middle u0 of the set's range, B(x) by central differences of a hundredth of the range; the offset
+    only where the recorded values vary. ``(None, None)`` when the recorded columns cannot be told apart."""
     n, m = states.shape[2], controls.shape[2]
     grid = problem.grid
     x, nxt = grid.wrap(states[:, :-1].reshape(-1, n)), grid.wrap(states[:, 1:].reshape(-1, n))
     u = controls.reshape(len(x), m)
     ok = np.isfinite(u).all(axis=1)
     x, nxt, u = x[ok], nxt[ok], u[ok]
-    span = np.ptp(problem.controls, axis=0)
-    span[span == 0] = 1.0
-    base = problem.step(x, np.zeros_like(u))
-    B = np.stack([_difference(grid, problem.step(x, np.outer(np.ones(len(x)), span[j] * np.eye(m)[j])), base)
-                  / span[j] for j in range(m)], axis=2)                      # (k, n, m), in cell widths per unit
-    vary = np.ptp(u, axis=0) > 0                    # an offset only where the recorded values vary (else: M alone)
+    low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
+    middle, delta = (low + high) / 2, np.where(high > low, (high - low) / 100, 1e-3)
+    ones = np.ones((len(x), 1))
+    B = np.stack([_difference(grid, problem.step(x, ones * (middle + delta[j] * np.eye(m)[j])),
+                              problem.step(x, ones * (middle - delta[j] * np.eye(m)[j]))) / (2 * delta[j])
+                  for j in range(m)], axis=2)                        # (k, n, m): cell widths per unit of control
+    target = _difference(grid, nxt, problem.step(x, ones * middle)) + B @ middle
+    vary = np.ptp(u, axis=0) > 0
     design = np.concatenate([(B[:, :, :, None] * u[:, None, None, :]).reshape(len(x), n, m * m), B[:, :, vary]], 2)
-    fit = np.linalg.lstsq(design.reshape(len(x) * n, -1), _difference(grid, nxt, base).ravel(), rcond=None)[0]
+    fit, _, rank, _ = np.linalg.lstsq(design.reshape(len(x) * n, -1), target.ravel(), rcond=None)
+    if rank < design.shape[2]:
+        return None, None
     offset = np.zeros(m)
     offset[vary] = fit[m * m:]
     return fit[:m * m].reshape(m, m), offset
@@ -151,17 +176,18 @@ def _control_map(problem, states, controls):
 
 def _describe(M, c, span, names):
     """``'torque' about 1000 times the recorded one``, ``'vx' about 1 times the recorded 'vy'`` (the largest
-    entry of each row), ``plus 1.5`` (an offset beyond a tenth of the set's range), for the controls changed."""
+    entry of each row), ``minus 1.5`` (an offset beyond a tenth of the set's range), for the controls changed;
+    "" when none is."""
     out = []
     for i, row in enumerate(M):
         j = int(np.argmax(np.abs(row)))
-        offset = f" plus {c[i]:.3g}" if abs(c[i]) > 0.1 * span[i] else ""
+        offset = f" {'plus' if c[i] > 0 else 'minus'} {abs(c[i]):.3g}" if abs(c[i]) > 0.1 * span[i] else ""
         if j == i and 0.8 <= row[j] <= 1.25 and not offset:
             continue
         one = "one" if j == i else repr(names[j])
         sign = " (its sign looks reversed)" if j == i and row[j] < 0 else ""
         out.append(f"{names[i]!r} about {row[j] + 0.0:.4g} times the recorded {one}{offset}{sign}")
-    return ", ".join(out) or "close to the recorded ones"
+    return ", ".join(out)
 
 
 def _difference(grid, a, b):
