@@ -135,28 +135,33 @@ def _control_motion(problem, states, controls):
             f"{np.sqrt(fits[best][0]):.2g}; {hint}")
 
 
-def _mean_miss(problem, states, controls):
-    """The mean squared miss (cell widths) of one step from states[:, k] under controls[:, k] to states[:, k + 1]
-    over the recorded steps; controls None: under the best control of the set, step by step."""
+def _steps(problem, states, controls=None):
+    """``(x, next, u)``: the steps states[:, k] -> states[:, k + 1] flattened and wrapped, with their controls
+    (N, L, m) where all are recorded (u None: every step)."""
     n = states.shape[2]
     x, nxt = problem.grid.wrap(states[:, :-1].reshape(-1, n)), problem.grid.wrap(states[:, 1:].reshape(-1, n))
     if controls is None:
-        return float(np.mean(_misses(problem, x, nxt).min(axis=1) ** 2))
+        return x, nxt, None
     u = controls.reshape(len(x), -1)
     ok = np.isfinite(u).all(axis=1)
-    return float(np.mean(_distance(problem.grid, problem.step(x[ok], u[ok]), nxt[ok]) ** 2)) if ok.any() else 0.0
+    return x[ok], nxt[ok], u[ok]
+
+
+def _mean_miss(problem, states, controls):
+    """The mean squared miss (cell widths) of one step from states[:, k] under controls[:, k] to states[:, k + 1]
+    over the recorded steps; controls None: under the best control of the set, step by step."""
+    x, nxt, u = _steps(problem, states, controls)
+    if u is None:
+        return float(np.mean(_misses(problem, x, nxt).min(axis=1) ** 2))
+    return float(np.mean(_distance(problem.grid, problem.step(x, u), nxt) ** 2)) if len(u) else 0.0
 
 
 def _control_map(problem, states, controls):
     """``(M, c)`` minimising the linearised miss of steps under M u + c: x' ~ step(x, u0) + B(x) (M u + c - u0)
     about the middle u0 of the set's range, B(x) by central differences of a hundredth of the range; the offset
     only where the recorded values vary. ``(None, None)`` when the recorded columns cannot be told apart."""
-    n, m = states.shape[2], controls.shape[2]
-    grid = problem.grid
-    x, nxt = grid.wrap(states[:, :-1].reshape(-1, n)), grid.wrap(states[:, 1:].reshape(-1, n))
-    u = controls.reshape(len(x), m)
-    ok = np.isfinite(u).all(axis=1)
-    x, nxt, u = x[ok], nxt[ok], u[ok]
+    n, m, grid = states.shape[2], controls.shape[2], problem.grid
+    x, nxt, u = _steps(problem, states, controls)
     low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
     middle, delta = (low + high) / 2, np.where(high > low, (high - low) / 100, 1e-3)
     ones = np.ones((len(x), 1))
@@ -215,10 +220,9 @@ def _check_time_direction(problem, recording, states, most=2000):
     """Refuse recordings whose states, in the order of t, follow the dynamics backwards: each step's best one-step
     prediction misses the next state by more than half the step, while a step taken from the next state lands
     on the previous one (a quarter of that miss or nearer)."""
-    n = states.shape[2]
-    x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
-    pick = np.linspace(0, len(x) - 1, min(most, len(x))).astype(int)
-    x, nxt = problem.grid.wrap(x[pick]), problem.grid.wrap(nxt[pick])
+    x, nxt, _ = _steps(problem, states)
+    pick = _spread(len(x), most)
+    x, nxt = x[pick], nxt[pick]
     forward = float(np.median(_misses(problem, x, nxt).min(axis=1)))
     step = float(np.median(_distance(problem.grid, nxt, x)))
     if not forward > max(0.5 * step, 0.05):           # the dynamics explain the steps (or nothing moves)
