@@ -126,6 +126,41 @@ def test_plausible_recordings_pass_without_a_word(case, data, tmp_path):
         _check(tmp_path, data)
 
 
+
+def _fast_unicycle(turn_scale=1.0):
+    """A unicycle recorded at dt = 2 s under random turn rates of [-1.5, 1.5] rad/s: about half of its steps turn
+    more than a quarter turn, as degrees would; its heading column times ``turn_scale``."""
+    system = named_system("unicycle", {"speed": 1.0})
+    grid = Grid.uniform([-40.0, -40.0, -np.pi], [40.0, 40.0, np.pi], [40, 40, 12], [False, False, True],
+                        system.state_names, system.state_units)
+    problem = Problem(system, grid, [-1.5, 0.0, 1.5], 2.0, 20, QuadraticReward([0, 0, 0], [1, 1, 0], [0.0], [1, 1, 0]))
+    rng = np.random.default_rng(3)
+    x, rows = rng.uniform([-1, -1, -np.pi], [1, 1, np.pi], (8, 3)), []
+    for k in range(11):
+        u = rng.choice([-1.5, 0.0, 1.5], size=(8, 1))
+        rows += [{"demo": f"d{d}", "t": 2.0 * k, "x": x[d, 0], "y": x[d, 1], "heading": turn_scale * x[d, 2],
+                  "turn_rate": u[d, 0] if k < 10 else np.nan} for d in range(8)]
+        x = grid.wrap(integrate(system, x, u, 2.0))
+    return problem, pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize("scale, warned", [(1.0, False), (180 / np.pi / 20, True)],
+                         ids=["radians: silent", "degrees / 20 (within one turn): warned"])
+def test_fast_turns_that_the_dynamics_make_are_not_taken_for_degrees(scale, warned, tmp_path):
+    """A step of more than a quarter turn reads as degrees unless the system's own steps turn as fast: the unicycle
+    at dt = 2 s does (silent), the same headings in degrees, scaled into one turn, do not (the x and y columns
+    move as radians would), so they are still named."""
+    problem, frame = _fast_unicycle(scale)
+    path = tmp_path / "u.csv"
+    frame.to_csv(path, index=False)
+    recording = read_recording(path, problem.system.state_names, problem.system.control_names)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always", InputWarning)
+        check_recording(problem, recording)
+    said = [str(w.message) for w in record if "look like degrees" in str(w.message)]
+    assert bool(said) == warned, said
+
+
 # ---- system files -------------------------------------------------------------------------------
 
 PLANAR = textwrap.dedent("""\

@@ -1,7 +1,8 @@
 """What a user gets wrong in recordings that still read (:func:`check_plausible`): refused or warned about.
 
 Refused: demonstrations longer than the horizon; time that runs backwards (the states follow the dynamics
-backwards). Warned about (:class:`mutual.inputs.InputWarning`): periodic angles that look like degrees;
+backwards). Warned about (:class:`mutual.inputs.InputWarning`): periodic angles that look like degrees
+(steps of more than a quarter turn count only where the dynamics do not make them);
 recorded controls far outside the control set; recorded controls that do not explain the recorded motion
 (a unit, a sign, exchanged columns, a shift by one row, or zeros for missing values); demonstrations that
 reach the edge of the box. Distances between states are in cell widths (periodic coordinates the short way).
@@ -22,9 +23,10 @@ def check_plausible(problem, recording, states, controls, index):
                          f"horizon); raise the horizon to at least {L}, or trim the recordings")
     grid = problem.grid
     for i in np.flatnonzero(grid.periodic):
+        fast_turns = not _turns_made(problem, states, i)  # fast turns read as degrees unless the model makes them
         message = angle_unit_warning([s[:, i] for s in recording.states], f"{recording.source}, column "
                                      f"{grid.names[i]!r} (periodic, radians)", grid.low[i], grid.high[i],
-                                     times=recording.times)
+                                     times=recording.times if fast_turns else None)
         if message:
             warn(message)
     if recording.controls is not None:
@@ -32,6 +34,25 @@ def check_plausible(problem, recording, states, controls, index):
         _check_control_motion(problem, recording, states, controls)
     _check_box_edges(problem, recording, states)
     _check_time_direction(problem, recording, states)
+
+
+def _turns_made(problem, states, i, most=2000):
+    """Whether the dynamics make the recorded steps of the periodic coordinate ``i`` that turn more than a quarter
+    turn (a fast vehicle at a long dt): for most of them (up to ``most``, spread), some control of the set lands
+    within a cell of the recorded next state. Angles in degrees move the other coordinates as radians would, so
+    their steps are not made. False when there are no such steps or the dynamics fail on them."""
+    period = problem.grid.high[i] - problem.grid.low[i]
+    turn = np.abs(np.diff(states[:, :, i], axis=1))
+    fast = (turn > period / 4) & ~(np.abs(turn - period) < period / 4)
+    if not fast.any():
+        return False
+    x, nxt, _ = _steps(problem, states)
+    pick = np.flatnonzero(fast.ravel())
+    pick = pick[_spread(pick.size, most)]
+    try:
+        return bool(np.mean(_misses(problem, x[pick], nxt[pick]).min(axis=1) < 1) > 0.5)
+    except ValueError:
+        return False
 
 
 def _check_box_edges(problem, recording, states):
