@@ -96,6 +96,13 @@ WARNED = [  # (case, the recording, phrases of the warning)
       "widen [state] low/high"]),
     ("torque normalised to [-1, 1]", GOOD.assign(torque=GOOD["torque"] / 3),
      ["'torque' about 3 times the recorded one"]),
+    ("two of four demonstrations in kN m", GOOD.assign(torque=GOOD["torque"].where(GOOD["demo"] > "demo-001",
+                                                                                  GOOD["torque"] / 1000)),
+     ["demonstrations 'demo-000', 'demo-001' (2 of 4, each fitted alone", "about 1000 times the recorded one",
+      "other units"]),
+    ("one demonstration with its sign reversed", GOOD.assign(torque=GOOD["torque"].where(GOOD["demo"] != "demo-002",
+                                                                                         -GOOD["torque"])),
+     ["demonstrations 'demo-002' (1 of 4", "its sign looks reversed"]),
 ]
 
 

@@ -96,18 +96,31 @@ def _check_control_motion(problem, recording, states, controls, most=4000):
     cuts the mean squared miss of the next states to a quarter of what the controls as recorded give (clipped to
     the set's range, as the models take them), and the miss is more than a fiftieth of a cell, what changed is
     named: a factor per control, exchanged columns, an offset, or the shift. Every recorded control 0 while the
-    motion needs others is said apart (missing values written as 0?). One map for the whole file: a file whose
-    demonstrations were recorded in different units is not caught. Dynamics that fail on a control the check
-    tries leave it unsaid (the model's own steps report such a failure)."""
+    motion needs others is said apart (missing values written as 0?). When the whole file passes, each
+    demonstration is fitted alone, so demonstrations recorded in other units than the rest are named. Dynamics
+    that fail on a control the check tries leave it unsaid (the model's own steps report such a failure)."""
     demos = _spread(len(states), most // max(states.shape[1], 1))
+    names = problem.system.control_names
+    where = f"column {names[0]!r}" if len(names) == 1 else "columns " + ", ".join(map(repr, names))
     try:
         message = _control_motion(problem, states[demos], controls[demos])
+        odd = [] if message or len(demos) < 2 else _odd_demonstrations(problem, states, controls, demos)
     except ValueError:
         return
     if message:
-        names = problem.system.control_names
-        where = f"column {names[0]!r}" if len(names) == 1 else "columns " + ", ".join(map(repr, names))
         warn(f"{recording.source}, {where}: {message}")
+    elif odd:
+        ids = ", ".join(repr(recording.ids[d]) for d, _ in odd[:5]) + (", ..." if len(odd) > 5 else "")
+        of = f"{len(demos)} looked at" if len(demos) < len(states) else len(demos)
+        warn(f"{recording.source}, {where}, demonstrations {ids} ({len(odd)} of {of}, each fitted alone; the others' "
+             f"recorded controls explain their steps): {odd[0][1]}; were they recorded in other units?")
+
+
+def _odd_demonstrations(problem, states, controls, demos):
+    """``[(d, text)]``: the demonstrations among ``demos`` whose recorded controls, fitted alone, do not explain
+    their own steps (:func:`_control_motion`)."""
+    said = ((d, _control_motion(problem, states[d:d + 1], controls[d:d + 1])) for d in demos)
+    return [(int(d), text) for d, text in said if text]
 
 
 def _spread(n, keep):
