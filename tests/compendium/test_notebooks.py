@@ -1,16 +1,12 @@
 """The notebook runner: it names the failing cell, requires declared parameters, exits non-zero naming the
-notebook, prints no progress bars in batch runs, and waits on its kernel sockets in short slices so a
-missed wake-up cannot hang a notebook."""
+notebook, and prints no progress bars in batch runs (its kernels' socket waits: test_kernel.py)."""
 
-import asyncio
-import queue
 import subprocess
 import sys
-import time
 
 import pytest
 
-from mutual.compendium.notebooks import NotebookError, _poll_in_slices, declared_parameters, execute
+from mutual.compendium.notebooks import NotebookError, declared_parameters, execute
 
 from helpers.claims import notebook_file
 
@@ -47,48 +43,6 @@ def test_batch_runs_print_no_progress_bars(tmp_path):
     nb = execute(path, {"quick": True})
     outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
     assert [o.get("text") for o in outputs] == ["20 1\n"], outputs
-
-
-class MissedWakeUpChannel:
-    def __init__(self, arrives_after):
-        self.arrival = time.monotonic() + arrives_after
-        self.waits = []
-
-    async def get_msg(self, timeout=None):
-        self.waits.append(timeout)
-        if time.monotonic() >= self.arrival:
-            return {"msg_type": "execute_reply"}
-        await asyncio.sleep(3600 if timeout is None else timeout)   # misses the arrival
-        raise queue.Empty
-
-
-def timed(coroutine):
-    started = time.monotonic()
-    result = asyncio.run(coroutine)
-    return result, time.monotonic() - started
-
-
-def test_a_missed_wake_up_costs_one_slice_not_the_whole_timeout():
-    channel = _poll_in_slices(MissedWakeUpChannel(arrives_after=0.3), slice_s=0.1)
-    reply, seconds = timed(channel.get_msg(timeout=60))
-    assert reply == {"msg_type": "execute_reply"}
-    assert seconds < 2, seconds
-    assert all(w <= 0.1 for w in channel.waits) and len(channel.waits) >= 3
-
-
-def test_waiting_without_a_timeout_also_polls_afresh():
-    channel = _poll_in_slices(MissedWakeUpChannel(arrives_after=0.25), slice_s=0.1)
-    reply, seconds = timed(channel.get_msg())
-    assert reply["msg_type"] == "execute_reply" and seconds < 2
-
-
-def test_the_timeout_still_holds():
-    channel = _poll_in_slices(MissedWakeUpChannel(arrives_after=1e9), slice_s=0.1)
-    started = time.monotonic()
-    with pytest.raises(queue.Empty):
-        asyncio.run(channel.get_msg(timeout=0.35))
-    assert 0.3 <= time.monotonic() - started < 1.5
-    assert max(channel.waits) <= 0.1 + 1e-9
 
 
 STARTS = """import sys
