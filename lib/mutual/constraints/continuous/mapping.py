@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..demonstrations import Demonstrations
-from .plausible import check_plausible
+from .plausible import check_plausible, step_misses
 from .recordings import align
 
 SUPPORT_WEIGHT = 1e-3
@@ -75,16 +75,11 @@ def _snap(problem, controls):
 
 
 def _infer(problem, x, nxt):
-    """The action whose one-step prediction from x lands nearest nxt, and that distance in cell widths."""
-    grid, A = problem.grid, problem.n_actions
-    pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
-    diff = pred - nxt[:, None, :]
-    for i in np.flatnonzero(grid.periodic):
-        period = grid.high[i] - grid.low[i]
-        diff[:, :, i] = np.mod(diff[:, :, i] + period / 2, period) - period / 2
+    """The action whose one-step prediction from x lands nearest nxt, and that distance in widths of nxt's cell."""
+    grid = problem.grid
     at = grid.locate(nxt)
-    scale = np.stack([grid.widths_1d(i)[at[:, i]] for i in range(grid.ndim)], axis=1)
-    dist = np.sqrt(((diff / scale[:, None, :]) ** 2).sum(axis=2))
+    widths = np.stack([grid.widths_1d(i)[at[:, i]] for i in range(grid.ndim)], axis=1)
+    dist = step_misses(problem, x, nxt, widths[:, None, :])
     best = np.argmin(dist, axis=1)
     return best, dist[np.arange(len(x)), best]
 

@@ -50,7 +50,7 @@ def _turns_made(problem, states, i, most=2000):
     pick = np.flatnonzero(fast.ravel())
     pick = pick[_spread(pick.size, most)]
     try:
-        return bool(np.mean(_misses(problem, x[pick], nxt[pick]).min(axis=1) < 1) > 0.5)
+        return bool(np.mean(step_misses(problem, x[pick], nxt[pick]).min(axis=1) < 1) > 0.5)
     except ValueError:
         return False
 
@@ -186,7 +186,7 @@ def _mean_miss(problem, states, controls):
     over the recorded steps; controls None: under the best control of the set, step by step."""
     x, nxt, u = _steps(problem, states, controls)
     if u is None:
-        return float(np.mean(_misses(problem, x, nxt).min(axis=1) ** 2))
+        return float(np.mean(step_misses(problem, x, nxt).min(axis=1) ** 2))
     return float(np.mean(_distance(problem.grid, problem.step(x, u), nxt) ** 2)) if len(u) else 0.0
 
 
@@ -229,25 +229,29 @@ def _describe(M, c, span, names):
     return ", ".join(out)
 
 
-def _difference(grid, a, b):
-    """a - b in cell widths, periodic coordinates the short way round."""
+def _difference(grid, a, b, widths=None):
+    """a - b in cell widths, periodic coordinates the short way round; ``widths`` the cell widths to count in
+    (broadcast against a - b), by default each coordinate's narrowest."""
     diff = a - b
     for i in np.flatnonzero(grid.periodic):
         period = grid.high[i] - grid.low[i]
         diff[..., i] = np.mod(diff[..., i] + period / 2, period) - period / 2
-    return diff / np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
+    if widths is None:
+        widths = np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
+    return diff / widths
 
 
-def _distance(grid, a, b):
+def _distance(grid, a, b, widths=None):
     """Distances (in cell widths, periodic coordinates the short way round) between states a (..., n) and b."""
-    return np.sqrt((_difference(grid, a, b) ** 2).sum(axis=-1))
+    return np.sqrt((_difference(grid, a, b, widths) ** 2).sum(axis=-1))
 
 
-def _misses(problem, x, nxt):
-    """(k, A): each control's one-step prediction's distance from the states x (k, n) to nxt (k, n), in cell widths."""
+def step_misses(problem, x, nxt, widths=None):
+    """(k, A): each control's one-step prediction's distance from the states x (k, n) to nxt (k, n), in cell widths
+    (``widths`` as for :func:`_difference`)."""
     A = problem.n_actions
     pred = problem.step(np.repeat(x, A, axis=0), np.tile(problem.controls, (len(x), 1))).reshape(len(x), A, -1)
-    return _distance(problem.grid, pred, nxt[:, None, :])
+    return _distance(problem.grid, pred, nxt[:, None, :], widths)
 
 
 def _check_time_direction(problem, recording, states, most=2000):
@@ -257,11 +261,11 @@ def _check_time_direction(problem, recording, states, most=2000):
     x, nxt, _ = _steps(problem, states)
     pick = _spread(len(x), most)
     x, nxt = x[pick], nxt[pick]
-    forward = float(np.median(_misses(problem, x, nxt).min(axis=1)))
+    forward = float(np.median(step_misses(problem, x, nxt).min(axis=1)))
     step = float(np.median(_distance(problem.grid, nxt, x)))
     if not forward > max(0.5 * step, 0.05):           # the dynamics explain the steps (or nothing moves)
         return
-    backward = float(np.median(_misses(problem, nxt, x).min(axis=1)))
+    backward = float(np.median(step_misses(problem, nxt, x).min(axis=1)))
     if backward < 0.25 * forward:
         raise ValueError(f"{recording.source}, column 't': the recorded motion runs backwards in time: in the order "
                          f"of t, the dynamics' best one-step prediction misses the next state by {forward:.3g} cell "
