@@ -1,12 +1,13 @@
 """What a user gets wrong in recordings that still read (:func:`check_plausible`): refused or warned about.
 
 Refused: demonstrations longer than the horizon; time that runs backwards (the states follow the dynamics
-backwards). Warned about (:class:`mutual.inputs.InputWarning`): periodic angles that look like degrees
-(steps of more than a quarter turn count only where the dynamics do not make them);
-recorded controls far outside the control set; recorded controls that do not explain the recorded motion
-(a unit, a sign, exchanged columns, a shift by one row, or zeros for missing values); demonstrations that
-reach the edge of the box. Distances between states are in cell widths (periodic coordinates the short way).
+backwards). Warned about (:class:`mutual.inputs.InputWarning`): periodic angles that look like degrees (the
+dynamics decide where they can); recorded controls far outside the control set; recorded controls that do not
+explain the recorded motion (a unit, a sign, exchanged columns, a shift by one row, or zeros for missing values),
+in the whole file or in the demonstrations that stand out; demonstrations that reach the edge of the box. Distances between states are in cell widths (periodic coordinates the short way).
 """
+
+from typing import NamedTuple
 
 import numpy as np
 
@@ -21,38 +22,69 @@ def check_plausible(problem, recording, states, controls, index):
         raise ValueError(f"{recording.where(0, index[0, -1], 't')}: the demonstrations span {L} steps of dt = "
                          f"{problem.dt:g} s, more than the horizon T = {problem.horizon} of the system ([time] "
                          f"horizon); raise the horizon to at least {L}, or trim the recordings")
-    grid = problem.grid
-    for i in np.flatnonzero(grid.periodic):
-        fast_turns = not _turns_made(problem, states, i)  # fast turns read as degrees unless the model makes them
-        message = angle_unit_warning([s[:, i] for s in recording.states], f"{recording.source}, column "
-                                     f"{grid.names[i]!r} (periodic, radians)", grid.low[i], grid.high[i],
-                                     times=recording.times if fast_turns else None)
-        if message:
-            warn(message)
+    _check_time_direction(problem, recording, states)
+    periodic = np.flatnonzero(problem.grid.periodic)
+    degrees = any([_check_angle_unit(problem, recording, states, controls, i) for i in periodic])
     if recording.controls is not None:
         _check_control_range(problem, recording)
-        _check_control_motion(problem, recording, states, controls)
+        if not degrees:  # angles in another unit also leave the controls unexplained: one cause, said once
+            _check_control_motion(problem, recording, states, controls)
     _check_box_edges(problem, recording, states)
-    _check_time_direction(problem, recording, states)
 
 
-def _turns_made(problem, states, i, most=2000):
-    """Whether the dynamics make the recorded steps of the periodic coordinate ``i`` that turn more than a quarter
-    turn (a fast vehicle at a long dt): for most of them (up to ``most``, spread), some control of the set lands
-    within a cell of the recorded next state. Angles in degrees move the other coordinates as radians would, so
-    their steps are not made. False when there are no such steps or the dynamics fail on them."""
-    period = problem.grid.high[i] - problem.grid.low[i]
-    turn = np.abs(np.diff(states[:, :, i], axis=1))
-    fast = (turn > period / 4) & ~(np.abs(turn - period) < period / 4)
-    if not fast.any():
-        return False
-    x, nxt, _ = _steps(problem, states)
-    pick = np.flatnonzero(fast.ravel())
-    pick = pick[_spread(pick.size, most)]
+def _check_angle_unit(problem, recording, states, controls, i):
+    """Warn when the periodic coordinate ``i`` looks like degrees, and say whether it did. The dynamics decide where
+    they can (:func:`_as_degrees`): steps they explain far better (a sixteenth of the mean squared miss) when the
+    column is read as degrees are named; where they explain the steps as recorded (the best control's step, or the
+    recorded control's, lands within a cell, rms), only values more than a turn beyond the box count (a fast
+    vehicle at a long dt turns more than a quarter turn a step); elsewhere steps of more than a quarter turn count
+    as well (:func:`mutual.inputs.angle_unit_warning`)."""
+    grid = problem.grid
+    where = f"{recording.source}, column {grid.names[i]!r} (periodic, radians)"
+    misses = _as_degrees(problem, states, i)
+    if misses is not None and 16 * misses[1] < misses[0] and misses[0] > 0.02 ** 2:
+        warn(f"{where}: the angles look like degrees, not radians: the dynamics explain the recorded steps when they "
+             f"are read as degrees (the best control's step misses the next state by {np.sqrt(misses[0]):.3g} cell "
+             f"widths, rms, as recorded; by {np.sqrt(misses[1]):.2g} read as degrees); if so, multiply by pi/180")
+        return True
+    tracks = [s[:, i] for s in recording.states]
+    if misses is not None and (misses[0] < 1 or _recorded_miss(problem, states, controls) < 1):
+        message = angle_unit_warning(np.concatenate(tracks), where, grid.low[i], grid.high[i])  # values only
+    else:
+        message = angle_unit_warning(tracks, where, grid.low[i], grid.high[i], times=recording.times)
+    if message:
+        warn(message)
+    return bool(message)
+
+
+def _recorded_miss(problem, states, controls):
+    """The mean squared miss (cell widths) of the steps under their recorded controls clipped to the set's range;
+    infinite without recorded controls or where the dynamics fail."""
+    if controls is None:
+        return np.inf
     try:
-        return bool(np.mean(step_misses(problem, x[pick], nxt[pick]).min(axis=1) < 1) > 0.5)
+        low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
+        return _mean_miss(problem, states, np.clip(controls, low, high))
     except ValueError:
-        return False
+        return np.inf
+
+
+def _as_degrees(problem, states, i, most=2000):
+    """``(as recorded, as degrees)``: the mean squared miss (cell widths) of the best control's step over up to
+    ``most`` recorded steps (spread), with the periodic coordinate ``i`` as recorded and read as degrees (times
+    pi/180); None where the dynamics fail."""
+    n = states.shape[2]
+    x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
+    pick = _spread(len(x), most)
+    x, nxt = x[pick], nxt[pick]
+    radians = np.where(np.arange(n) == i, np.pi / 180, 1.0)
+
+    def miss(a, b):
+        return float(np.mean(step_misses(problem, problem.grid.wrap(a), problem.grid.wrap(b)).min(axis=1) ** 2))
+    try:
+        return miss(x, nxt), miss(x * radians, nxt * radians)
+    except ValueError:
+        return None
 
 
 def _check_box_edges(problem, recording, states):
@@ -96,31 +128,63 @@ def _check_control_motion(problem, recording, states, controls, most=4000):
     cuts the mean squared miss of the next states to a quarter of what the controls as recorded give (clipped to
     the set's range, as the models take them), and the miss is more than a fiftieth of a cell, what changed is
     named: a factor per control, exchanged columns, an offset, or the shift. Every recorded control 0 while the
-    motion needs others is said apart (missing values written as 0?). When the whole file passes, each
-    demonstration is fitted alone, so demonstrations recorded in other units than the rest are named. Dynamics
-    that fail on a control the check tries leave it unsaid (the model's own steps report such a failure)."""
+    motion needs others is said apart (missing values written as 0?). The whole file is fitted on up to ``most``
+    steps of demonstrations spread over it. When it passes, the demonstrations that stand out (:func:`_odd`) are
+    fitted together, then each alone, and named where a unit, a sign, exchanged columns, a shift or zeros explain
+    them; the fits need 4 (m^2 + m) recorded steps. Dynamics that fail on a control the check tries leave it
+    unsaid (the model's own steps report such a failure)."""
     demos = _spread(len(states), most // max(states.shape[1], 1))
     names = problem.system.control_names
     where = f"column {names[0]!r}" if len(names) == 1 else "columns " + ", ".join(map(repr, names))
     try:
-        message = _control_motion(problem, states[demos], controls[demos])
-        odd = [] if message or len(demos) < 2 else _odd_demonstrations(problem, states, controls, demos)
+        found = _control_motion(problem, states[demos], controls[demos])
+        groups = [] if found else _odd_groups(problem, states, controls)
     except ValueError:
         return
-    if message:
-        warn(f"{recording.source}, {where}: {message}")
-    elif odd:
-        ids = ", ".join(repr(recording.ids[d]) for d, _ in odd[:5]) + (", ..." if len(odd) > 5 else "")
-        of = f"{len(demos)} looked at" if len(demos) < len(states) else len(demos)
-        warn(f"{recording.source}, {where}, demonstrations {ids} ({len(odd)} of {of}, each fitted alone; the others' "
-             f"recorded controls explain their steps): {odd[0][1]}; were they recorded in other units?")
+    if found:
+        warn(f"{recording.source}, {where}: {found.text}")
+    for group, found in groups:
+        ids = ", ".join(repr(recording.ids[d]) for d in group[:5]) + (", ..." if len(group) > 5 else "")
+        units = "; were they recorded in other units?" if found.kind == "mapped" else ""
+        warn(f"{recording.source}, {where}: demonstrations {ids} ({len(group)} of {len(states)}) follow their recorded "
+             f"controls far worse than the others do: {found.text}{units}")
 
 
-def _odd_demonstrations(problem, states, controls, demos):
-    """``[(d, text)]``: the demonstrations among ``demos`` whose recorded controls, fitted alone, do not explain
-    their own steps (:func:`_control_motion`)."""
-    said = ((d, _control_motion(problem, states[d:d + 1], controls[d:d + 1])) for d in demos)
-    return [(int(d), text) for d, text in said if text]
+def _odd(problem, states, controls):
+    """The demonstrations that stand out: the mean squared miss of their steps under their recorded controls
+    (clipped to the set's range) is above 4 times that of the best explained demonstration and above a fiftieth
+    of a cell (a demonstration that sits still makes every other one stand out: the fits then judge)."""
+    low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
+    N, L, m = controls.shape
+    x, nxt, _ = _steps(problem, states)
+    u = np.clip(controls.reshape(-1, m), low, high)
+    ok = np.isfinite(u).all(axis=1)
+    squared = np.zeros(N * L)
+    squared[ok] = _distance(problem.grid, problem.step(x[ok], u[ok]), nxt[ok]) ** 2
+    counts = ok.reshape(N, L).sum(axis=1)
+    miss = np.where(counts > 0, squared.reshape(N, L).sum(axis=1) / np.maximum(counts, 1), np.nan)
+    best = np.nanmin(miss) if np.isfinite(miss).any() else np.nan
+    return np.flatnonzero((miss > 4 * best) & (miss > 0.02 ** 2))
+
+
+def _odd_groups(problem, states, controls, alone=20):
+    """``[(demonstrations, found)]``: the demonstrations that stand out (:func:`_odd`), with what explains them
+    (:func:`_control_motion`) where it is a change of unit, sign or columns, a shift or zeros (an offset or a mild
+    factor is also what an unmodelled force or a weaker actuator gives): fitted together, and each alone (up to
+    ``alone`` of them, those long enough); the joint fit when every demonstration fitted alone agrees with its
+    kind of change, else one group per kind of change found alone."""
+    odd = _odd(problem, states, controls) if len(states) > 1 else []
+    if len(odd) == 0:
+        return []
+    joint = _control_motion(problem, states[odd], controls[odd])
+    groups = {}
+    for d in odd[:alone]:
+        found = _control_motion(problem, states[d:d + 1], controls[d:d + 1])
+        if found and found.unit_like:
+            groups.setdefault(found.kind, ([], found))[0].append(int(d))
+    if joint and joint.unit_like and set(groups) <= {joint.kind}:
+        return [(list(odd), joint)]
+    return list(groups.values())
 
 
 def _spread(n, keep):
@@ -128,8 +192,26 @@ def _spread(n, keep):
     return np.unique(np.linspace(0, n - 1, max(1, min(n, keep))).astype(int))
 
 
+class Found(NamedTuple):
+    """What explains recorded steps better than their recorded controls: ``kind`` "zeros", "mapped" (by ``M u + c``)
+    or the shift (-1 or 1), and the warning's ``text``."""
+
+    kind: object
+    text: str
+    M: np.ndarray | None = None
+
+    @property
+    def unit_like(self):
+        """Whether it is a change of unit (a factor beyond [0.5, 2]), sign or columns, a shift or zeros."""
+        if self.kind != "mapped":
+            return True
+        column = np.argmax(np.abs(self.M), axis=1)
+        factor = self.M[np.arange(len(self.M)), column]
+        return bool(np.any(column != np.arange(len(self.M))) or np.any((factor < 0.5) | (factor > 2)))
+
+
 def _control_motion(problem, states, controls):
-    """The warning's text of :func:`_check_control_motion`, or None."""
+    """The :class:`Found` of :func:`_check_control_motion`, or None."""
     L, m = controls.shape[1], controls.shape[2]
     low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
     raw, controls = controls, np.clip(controls, low, high)     # what acted at most: the set's range
@@ -143,9 +225,10 @@ def _control_motion(problem, states, controls):
     if np.all(u == 0):
         best = _mean_miss(problem, states, None)               # each step's best control: fits noise too, so 16x
         if 16 * best < recorded:
-            return (f"every recorded control is 0, but the motion needs others (a step with the best control of "
-                    f"the set misses the next state by {np.sqrt(best):.3g} cell widths, rms; with 0 by "
-                    f"{np.sqrt(recorded):.3g}): were missing values written as 0? leave them empty")
+            return Found("zeros", f"every recorded control is 0, but the motion needs others (a step with the best "
+                                  f"control of the set misses the next state by {np.sqrt(best):.3g} cell widths, rms; "
+                                  f"with 0 by {np.sqrt(recorded):.3g}): were missing values written as 0? leave them "
+                                  "empty")
         return None
     fits, M, c = {}, *_control_map(problem, states, raw)
     changed = None if M is None else _describe(M, c, high - low, problem.system.control_names)
@@ -164,9 +247,9 @@ def _control_motion(problem, states, controls):
     else:
         what, hint = "shifted", (f"the steps follow the control recorded one step (dt = {problem.dt:g} s) "
                                  f"{'later' if best > 0 else 'earlier'}: each row's control acts from its t on")
-    return (f"the recorded controls do not explain the recorded motion: steps with them miss the next state by "
-            f"{np.sqrt(fits[best][1]):.3g} cell widths (rms), steps with the {what} ones by "
-            f"{np.sqrt(fits[best][0]):.2g}; {hint}")
+    return Found(best, f"the recorded controls do not explain the recorded motion: steps with them miss the next "
+                       f"state by {np.sqrt(fits[best][1]):.3g} cell widths (rms), steps with the {what} ones by "
+                       f"{np.sqrt(fits[best][0]):.2g}; {hint}", M if best == "mapped" else None)
 
 
 def _steps(problem, states, controls=None):
