@@ -103,6 +103,15 @@ WARNED = [  # (case, the recording, phrases of the warning)
     ("one demonstration with its sign reversed", GOOD.assign(torque=GOOD["torque"].where(GOOD["demo"] != "demo-002",
                                                                                          -GOOD["torque"])),
      ["demonstrations 'demo-002' (1 of 4)", "its sign looks reversed"]),
+    ("one reversed beside one at rest (which sets no standard)",
+     GOOD.assign(torque=GOOD["torque"].where(GOOD["demo"] != "demo-002", -GOOD["torque"]))
+     .pipe(lambda f: f.where(f["demo"] != "demo-000", f.assign(theta=0.0, theta_dot=0.0, torque=0.0)))
+     .assign(torque=lambda f: f["torque"].where(f["t"] < 1.0)),
+     ["demonstrations 'demo-002' (1 of 4)", "its sign looks reversed"]),
+    ("torques 0.77 times what acted (a gain the model has 30 % off, or lbf ft)",
+     GOOD.assign(torque=GOOD["torque"] * 0.77),
+     ["'torque' about 1.299 times the recorded one", "the system's parameters (a heavier system, a weaker actuator) "
+      "or the units differ"]),
 ]
 
 
@@ -141,10 +150,12 @@ def test_an_unmodelled_force_in_some_demonstrations_is_not_blamed_on_units(tmp_p
     grid = Grid.uniform([-np.pi, -14.0], [np.pi, 14.0], [41, 71], [True, False], SYSTEM.state_names, SYSTEM.state_units)
     problem = Problem(SYSTEM, grid, [-3.0, 0.0, 3.0], 0.1, 60, QuadraticReward([np.pi, 0], [1, 0.1], [0.0], [1, 1]))
     rng = np.random.default_rng(2)
-    x = np.r_[np.c_[rng.uniform(-1, 1, 15), rng.uniform(-1, 1, 15)], np.c_[rng.uniform(-1, 1, 5), [7.0, -7.0] * 2 + [7.0]]]
+    hanging = np.c_[rng.uniform(-1, 1, 15), rng.uniform(-1, 1, 15)]
+    x = np.r_[hanging, np.c_[rng.uniform(-1, 1, 5), [7.0, -7.0, 7.0, -7.0, 7.0]]]
     rows = []
     for k in range(61):
-        u = np.clip(np.r_[-x[:15, 1:2] + rng.normal(0, 1, (15, 1)), 3 * np.sign(x[15:, 1:2]) + rng.normal(0, 0.5, (5, 1))], -3, 3)
+        u = np.r_[-x[:15, 1:2] + rng.normal(0, 1, (15, 1)), 3 * np.sign(x[15:, 1:2]) + rng.normal(0, 0.5, (5, 1))]
+        u = np.clip(u, -3, 3)
         rows += [{"demo": f"d{d:02d}", "t": round(0.1 * k, 10), "theta": x[d, 0], "theta_dot": x[d, 1],
                   "torque": u[d, 0] if k < 60 else np.nan} for d in range(20)]
         x = grid.wrap(integrate(truth, x, u, 0.1))
@@ -155,34 +166,39 @@ def test_an_unmodelled_force_in_some_demonstrations_is_not_blamed_on_units(tmp_p
         check_recording(problem, read_recording(path, SYSTEM.state_names, SYSTEM.control_names))
 
 
-def _unicycle(rate, heading, degrees=False):
-    """A unicycle recorded at dt = 2 s under random turn rates of the set [-rate, 0, rate] rad/s from headings in
-    [-heading, heading]; its heading column in degrees when ``degrees``."""
+def _unicycle(rate, heading, degrees=False, noise=0.0, dt=2.0):
+    """A unicycle recorded every ``dt`` s under random turn rates of the set [-rate, 0, rate] rad/s from headings
+    in [-heading, heading]; its heading column in degrees when ``degrees``, with measurement noise of ``noise``
+    rad."""
     system = named_system("unicycle", {"speed": 1.0})
     grid = Grid.uniform([-40.0, -40.0, -np.pi], [40.0, 40.0, np.pi], [40, 40, 12], [False, False, True],
                         system.state_names, system.state_units)
     levels = [-rate, 0.0, rate]
-    problem = Problem(system, grid, levels, 2.0, 20, QuadraticReward([0, 0, 0], [1, 1, 0], [0.0], [1, 1, 0]))
+    problem = Problem(system, grid, levels, dt, 20, QuadraticReward([0, 0, 0], [1, 1, 0], [0.0], [1, 1, 0]))
     rng = np.random.default_rng(3)
     x, rows = rng.uniform([-1, -1, -heading], [1, 1, heading], (8, 3)), []
     for k in range(11):
         u = rng.choice(levels, size=(8, 1))
-        rows += [{"demo": f"d{d}", "t": 2.0 * k, "x": x[d, 0], "y": x[d, 1],
-                  "heading": np.degrees(x[d, 2]) if degrees else x[d, 2], "turn_rate": u[d, 0] if k < 10 else np.nan}
+        rows += [{"demo": f"d{d}", "t": dt * k, "x": x[d, 0], "y": x[d, 1],
+                  "heading": (np.degrees if degrees else float)(x[d, 2] + noise * rng.normal()),
+                  "turn_rate": u[d, 0] if k < 10 else np.nan}
                  for d in range(8)]
-        x = grid.wrap(integrate(system, x, u, 2.0))
+        x = grid.wrap(integrate(system, x, u, dt))
     return problem, pd.DataFrame(rows)
 
 
-@pytest.mark.parametrize("rate, heading, degrees, warned", [
-    (1.5, np.pi, False, False), (1.5, np.pi, True, True), (0.005, 0.1, True, True), (0.005, 0.1, False, False)],
+@pytest.mark.parametrize("rate, heading, noise, dt, degrees, warned", [
+    (1.5, np.pi, 0, 2, False, False), (1.5, np.pi, 0, 2, True, True), (0.005, 0.1, 0, 2, True, True),
+    (0.005, 0.1, 0, 2, False, False), (0.2, 0.2, 0.026, 0.25, False, False)],
     ids=["turning 3 rad a step, radians: silent", "the same in degrees: warned",
-         "heading within 8 degrees, in degrees (only its steps tell): warned", "the same in radians: silent"])
-def test_fast_turns_that_the_dynamics_make_are_not_taken_for_degrees(rate, heading, degrees, warned, tmp_path):
+         "heading within 8 degrees, in degrees (only its steps tell): warned", "the same in radians: silent",
+         "nearly straight with a noisy heading, radians: silent"])
+def test_fast_turns_that_the_dynamics_make_are_not_taken_for_degrees(rate, heading, noise, dt, degrees, warned,
+                                                                     tmp_path):
     """A step of more than a quarter turn reads as degrees unless the system's own steps turn as fast: a unicycle
     turning 3 rad a step at dt = 2 s does (silent); headings kept within 8 degrees and recorded in degrees stay
     within one turn, but their steps are explained by the dynamics only when read as degrees, so they are named."""
-    problem, frame = _unicycle(rate, heading, degrees)
+    problem, frame = _unicycle(rate, heading, degrees, noise, dt)
     path = tmp_path / "u.csv"
     frame.to_csv(path, index=False)
     recording = read_recording(path, problem.system.state_names, problem.system.control_names)

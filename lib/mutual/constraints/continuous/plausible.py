@@ -4,7 +4,8 @@ Refused: demonstrations longer than the horizon; time that runs backwards (the s
 backwards). Warned about (:class:`mutual.inputs.InputWarning`): periodic angles that look like degrees (the
 dynamics decide where they can); recorded controls far outside the control set; recorded controls that do not
 explain the recorded motion (a unit, a sign, exchanged columns, a shift by one row, or zeros for missing values),
-in the whole file or in the demonstrations that stand out; demonstrations that reach the edge of the box. Distances between states are in cell widths (periodic coordinates the short way).
+in the whole file or in the demonstrations that stand out; demonstrations that reach the edge of the box.
+Distances between states are in cell widths (periodic coordinates the short way).
 """
 
 from typing import NamedTuple
@@ -72,17 +73,20 @@ def _recorded_miss(problem, states, controls):
 def _as_degrees(problem, states, i, most=2000):
     """``(as recorded, as degrees)``: the mean squared miss (cell widths) of the best control's step over up to
     ``most`` recorded steps (spread), with the periodic coordinate ``i`` as recorded and read as degrees (times
-    pi/180); None where the dynamics fail."""
+    pi/180, its miss still counted in recorded units); None where the dynamics fail."""
     n = states.shape[2]
     x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
     pick = _spread(len(x), most)
     x, nxt = x[pick], nxt[pick]
     radians = np.where(np.arange(n) == i, np.pi / 180, 1.0)
 
-    def miss(a, b):
-        return float(np.mean(step_misses(problem, problem.grid.wrap(a), problem.grid.wrap(b)).min(axis=1) ** 2))
+    widths = np.array([np.min(problem.grid.widths_1d(j)) for j in range(n)])
+
+    def miss(a, b, unit=1.0):   # in the recorded units: noise on the angle is not shrunk with it
+        wrap = problem.grid.wrap
+        return float(np.mean(step_misses(problem, wrap(a), wrap(b), widths * unit).min(axis=1) ** 2))
     try:
-        return miss(x, nxt), miss(x * radians, nxt * radians)
+        return miss(x, nxt), miss(x * radians, nxt * radians, radians)
     except ValueError:
         return None
 
@@ -129,10 +133,11 @@ def _check_control_motion(problem, recording, states, controls, most=4000):
     the set's range, as the models take them), and the miss is more than a fiftieth of a cell, what changed is
     named: a factor per control, exchanged columns, an offset, or the shift. Every recorded control 0 while the
     motion needs others is said apart (missing values written as 0?). The whole file is fitted on up to ``most``
-    steps of demonstrations spread over it. When it passes, the demonstrations that stand out (:func:`_odd`) are
-    fitted together, then each alone, and named where a unit, a sign, exchanged columns, a shift or zeros explain
-    them; the fits need 4 (m^2 + m) recorded steps. Dynamics that fail on a control the check tries leave it
-    unsaid (the model's own steps report such a failure)."""
+    steps of demonstrations spread over it. When it passes, every demonstration is scored under its recorded
+    controls, and those that stand out are named where a unit, a sign, exchanged columns, a shift or zeros explain
+    them (:func:`_odd_groups`); a fit needs 4 (m^2 + m) recorded steps, so a single shorter demonstration is not
+    fitted alone. Dynamics that fail on a control the check tries leave it unsaid (the model's own steps report
+    such a failure)."""
     demos = _spread(len(states), most // max(states.shape[1], 1))
     names = problem.system.control_names
     where = f"column {names[0]!r}" if len(names) == 1 else "columns " + ", ".join(map(repr, names))
@@ -150,41 +155,72 @@ def _check_control_motion(problem, recording, states, controls, most=4000):
              f"controls far worse than the others do: {found.text}{units}")
 
 
-def _odd(problem, states, controls):
-    """The demonstrations that stand out: the mean squared miss of their steps under their recorded controls
-    (clipped to the set's range) is above 4 times that of the best explained demonstration and above a fiftieth
-    of a cell (a demonstration that sits still makes every other one stand out: the fits then judge)."""
-    low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
-    N, L, m = controls.shape
+def _per_demonstration(problem, states, controls):
+    """Each demonstration's mean squared miss (cell widths) of its steps under ``controls`` (N, L, m), clipped to
+    the set's range, where recorded (None: the best control of the set, step by step); NaN without a step."""
+    N, L, n = states.shape[0], states.shape[1] - 1, states.shape[2]
     x, nxt, _ = _steps(problem, states)
-    u = np.clip(controls.reshape(-1, m), low, high)
-    ok = np.isfinite(u).all(axis=1)
-    squared = np.zeros(N * L)
-    squared[ok] = _distance(problem.grid, problem.step(x[ok], u[ok]), nxt[ok]) ** 2
+    squared, ok = np.zeros(N * L), np.ones(N * L, bool)
+    if controls is None:
+        squared = step_misses(problem, x, nxt).min(axis=1) ** 2
+    else:
+        u = np.clip(controls.reshape(N * L, -1), problem.controls.min(axis=0), problem.controls.max(axis=0))
+        ok = np.isfinite(u).all(axis=1)
+        squared[ok] = _distance(problem.grid, problem.step(x[ok], u[ok]), nxt[ok]) ** 2
     counts = ok.reshape(N, L).sum(axis=1)
-    miss = np.where(counts > 0, squared.reshape(N, L).sum(axis=1) / np.maximum(counts, 1), np.nan)
-    best = np.nanmin(miss) if np.isfinite(miss).any() else np.nan
-    return np.flatnonzero((miss > 4 * best) & (miss > 0.02 ** 2))
+    return np.where(counts > 0, squared.reshape(N, L).sum(axis=1) / np.maximum(counts, 1), np.nan)
+
+
+def _odd(problem, states, controls):
+    """The demonstrations that stand out, worst first: the mean squared miss of their steps under their recorded
+    controls is above 4 times that of the demonstration at the 5th percentile of those that move (one that sits
+    still or a few lucky ones set no standard) and above a fiftieth of a cell."""
+    miss = _per_demonstration(problem, states, controls)
+    moves = np.isfinite(miss) & (np.ptp(states, axis=1).max(axis=1) > 0)
+    if not moves.any():
+        return np.zeros(0, int)
+    typical = np.percentile(miss[moves], 5)
+    odd = np.flatnonzero((miss > 4 * typical) & (miss > 0.02 ** 2))
+    return odd[np.argsort(-miss[odd], kind="stable")]
 
 
 def _odd_groups(problem, states, controls, alone=20):
-    """``[(demonstrations, found)]``: the demonstrations that stand out (:func:`_odd`), with what explains them
+    """``[(demonstrations, found)]``: the demonstrations that stand out (:func:`_odd`) and what explains them
     (:func:`_control_motion`) where it is a change of unit, sign or columns, a shift or zeros (an offset or a mild
-    factor is also what an unmodelled force or a weaker actuator gives): fitted together, and each alone (up to
-    ``alone`` of them, those long enough); the joint fit when every demonstration fitted alone agrees with its
-    kind of change, else one group per kind of change found alone."""
+    factor is also what an unmodelled force or a weaker actuator gives; zeros only where other demonstrations
+    recorded controls). The changes come from fitting them together and the worst ``alone`` each alone; each
+    change, in that order, claims every demonstration left whose miss it cuts to a quarter (zeros: a sixteenth)."""
     odd = _odd(problem, states, controls) if len(states) > 1 else []
     if len(odd) == 0:
         return []
-    joint = _control_motion(problem, states[odd], controls[odd])
-    groups = {}
-    for d in odd[:alone]:
-        found = _control_motion(problem, states[d:d + 1], controls[d:d + 1])
-        if found and found.unit_like:
-            groups.setdefault(found.kind, ([], found))[0].append(int(d))
-    if joint and joint.unit_like and set(groups) <= {joint.kind}:
-        return [(list(odd), joint)]
-    return list(groups.values())
+    finite = controls[np.isfinite(controls)]
+    fits = [_control_motion(problem, states[odd], controls[odd])]
+    fits += [_control_motion(problem, states[d:d + 1], controls[d:d + 1]) for d in odd[:alone]]
+    groups, left = [], np.asarray(odd)
+    for found in fits:
+        if not found or not found.unit_like or (found.kind == "zeros" and not np.any(finite != 0)) or not left.size:
+            continue
+        fixed, recorded = _remedied(problem, states[left], controls[left], found)
+        claimed = fixed * (16 if found.kind == "zeros" else 4) < recorded
+        if claimed.any():
+            groups.append((sorted(left[claimed].tolist()), found))
+            left = left[~claimed]
+    return groups
+
+
+def _remedied(problem, states, controls, found):
+    """Each demonstration's mean squared miss with ``found``'s change made to its recorded controls, and as
+    recorded, on the same steps."""
+    if found.kind == "mapped":
+        return _per_demonstration(problem, states, controls @ found.M.T + found.c), _per_demonstration(
+            problem, states, controls)
+    if found.kind == "zeros":
+        return _per_demonstration(problem, states, None), _per_demonstration(problem, states, controls)
+    if found.kind == -1:        # step k under the control of step k - 1
+        return (_per_demonstration(problem, states[:, 1:], controls[:, :-1]),
+                _per_demonstration(problem, states[:, 1:], controls[:, 1:]))
+    return (_per_demonstration(problem, states[:, :-1], controls[:, 1:]),
+            _per_demonstration(problem, states[:, :-1], controls[:, :-1]))
 
 
 def _spread(n, keep):
@@ -199,6 +235,7 @@ class Found(NamedTuple):
     kind: object
     text: str
     M: np.ndarray | None = None
+    c: np.ndarray | None = None
 
     @property
     def unit_like(self):
@@ -243,13 +280,16 @@ def _control_motion(problem, states, controls):
     if best is None or cut[best] < 4:
         return None
     if best == "mapped":
-        what, hint = "fitted", f"the controls that explain the steps are {changed}: check the units, signs and columns"
+        mild = not Found("mapped", "", M, c).unit_like   # also what other masses, gains or frictions give
+        what, hint = "fitted", (f"the controls that explain the steps are {changed}: " + (
+            "the system's parameters (a heavier system, a weaker actuator) or the units differ from the model's"
+            if mild else "check the units, signs and columns"))
     else:
         what, hint = "shifted", (f"the steps follow the control recorded one step (dt = {problem.dt:g} s) "
                                  f"{'later' if best > 0 else 'earlier'}: each row's control acts from its t on")
     return Found(best, f"the recorded controls do not explain the recorded motion: steps with them miss the next "
                        f"state by {np.sqrt(fits[best][1]):.3g} cell widths (rms), steps with the {what} ones by "
-                       f"{np.sqrt(fits[best][0]):.2g}; {hint}", M if best == "mapped" else None)
+                       f"{np.sqrt(fits[best][0]):.2g}; {hint}", *((M, c) if best == "mapped" else ()))
 
 
 def _steps(problem, states, controls=None):
