@@ -289,6 +289,36 @@ def test_one_control_of_two_with_its_sign_reversed_or_the_columns_exchanged_are_
     assert "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'" in message, message
 
 
+
+@pytest.mark.parametrize("change, phrase", [
+    (lambda f: f.assign(vx=f["vy"], vy=f["vx"]),
+     "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'"),
+    (lambda f: f.assign(vy=-f["vy"]), "'vy' about -1 times the recorded one"),
+    (lambda f: f.assign(vx=f["vx"] / 100, vy=f["vy"] / 100), "'vx' about 100 times the recorded one")],
+    ids=["columns exchanged", "one sign reversed", "both controls in another unit (x 1/100)"])
+def test_one_demonstration_too_short_to_fit_is_still_named(change, phrase, tmp_path):
+    """Six planar demonstrations of 12 steps, one of them with a mistake: 12 steps are too few to fit a 2 x 2 map
+    and offset (24 are needed), so the usual changes are tried as they are, and the one that explains it is named."""
+    problem = load_system(_system(tmp_path)).problem
+    rng = np.random.default_rng(5)
+    x, rows = np.tile([1.5, 1.0], (6, 1)), []
+    for k in range(13):
+        u = problem.controls[rng.integers(len(problem.controls), size=6)]
+        u[problem.grid.outside(x + 0.25 * u)] = 0.0
+        rows += [{"demo": f"d{d}", "t": 0.25 * k, "x": x[d, 0], "y": x[d, 1], "vx": u[d, 0], "vy": u[d, 1]}
+                 for d in range(6)]
+        x = x + 0.25 * u
+    frame = pd.DataFrame(rows)
+    odd = frame["demo"] == "d4"
+    frame = pd.concat([frame[~odd], change(frame[odd])]).sort_index()
+    path = tmp_path / "planar.csv"
+    frame.to_csv(path, index=False)
+    with pytest.warns(InputWarning) as record:
+        check_recording(problem, read_recording(path, problem.system.state_names, problem.system.control_names))
+    said = [str(w.message) for w in record if "follow their recorded controls" in str(w.message)]
+    assert len(said) == 1 and "demonstrations 'd4' (1 of 6)" in said[0] and phrase in said[0], said
+
+
 SYSTEM_MISTAKES = [  # (case, spec, [control] values, [simulate] start, phrases of the error)
     ("a control of the wrong length", "planar:f", "[[1.0, 0.0], [0.0]]", "[0.25, 1.0]",
      ["key 'control.values'", "each a list of 2 numbers"]),

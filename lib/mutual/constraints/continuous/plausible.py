@@ -185,26 +185,34 @@ def _odd(problem, states, controls):
 
 
 def _odd_groups(problem, states, controls, alone=20):
-    """``[(demonstrations, found)]``: the demonstrations that stand out (:func:`_odd`) and what explains them
-    (:func:`_control_motion`) where it is a change of unit, sign or columns, a shift or zeros (an offset or a mild
-    factor is also what an unmodelled force or a weaker actuator gives; zeros only where other demonstrations
-    recorded controls). The changes come from fitting them together and the worst ``alone`` each alone; each
-    change, in that order, claims every demonstration left whose miss it cuts to a quarter (zeros: a sixteenth)."""
+    """``[(demonstrations, found)]``: the demonstrations that stand out (:func:`_odd`) and what explains them where
+    it is a change of unit, sign or columns, a shift or zeros (an offset or a mild factor is also what an
+    unmodelled force or a weaker actuator gives). The changes: fitted to them together and to the worst ``alone``
+    each alone (:func:`_control_motion`), then the :func:`_candidates` as they are (a demonstration too short to
+    fit); each in turn claims every demonstration left whose miss it cuts to a quarter (zeros: a sixteenth, and
+    only where every control of the demonstration is 0 and others are not)."""
     odd = _odd(problem, states, controls) if len(states) > 1 else []
     if len(odd) == 0:
         return []
-    finite = controls[np.isfinite(controls)]
     fits = [_control_motion(problem, states[odd], controls[odd])]
     fits += [_control_motion(problem, states[d:d + 1], controls[d:d + 1]) for d in odd[:alone]]
+    changes = [(f.kind, f.M, f.c) for f in fits if f and f.unit_like] + [(k, M, None) for k, M in _candidates(
+        controls.shape[2])]
+    zero = np.array([np.all(c[np.isfinite(c)] == 0) for c in controls])
     groups, left = [], np.asarray(odd)
-    for found in fits:
-        if not found or not found.unit_like or (found.kind == "zeros" and not np.any(finite != 0)) or not left.size:
+    for kind, M, c in changes:
+        c = np.zeros(controls.shape[2]) if kind == "mapped" and c is None else c
+        able = left[~zero[left]] if kind != "zeros" else left[zero[left]] if not zero.all() else left[:0]
+        if not able.size:
             continue
-        fixed, recorded = _remedied(problem, states[left], controls[left], found)
-        claimed = fixed * (16 if found.kind == "zeros" else 4) < recorded
+        found = Found(kind, "", M, c)
+        changed, recorded = _remedied(problem, states[able], controls[able], found)
+        claimed = changed * (16 if kind == "zeros" else 4) < recorded
         if claimed.any():
-            groups.append((sorted(left[claimed].tolist()), found))
-            left = left[~claimed]
+            take = able[claimed]
+            groups.append((sorted(take.tolist()), _found(problem, kind, np.mean(recorded[claimed]),
+                                                         np.mean(changed[claimed]), M, c)))
+            left = np.setdiff1d(left, take)
     return groups
 
 
@@ -261,15 +269,9 @@ def _control_motion(problem, states, controls):
         return None
     if np.all(u == 0):
         best = _mean_miss(problem, states, None)               # each step's best control: fits noise too, so 16x
-        if 16 * best < recorded:
-            return Found("zeros", f"every recorded control is 0, but the motion needs others (a step with the best "
-                                  f"control of the set misses the next state by {np.sqrt(best):.3g} cell widths, rms; "
-                                  f"with 0 by {np.sqrt(recorded):.3g}): were missing values written as 0? leave them "
-                                  "empty")
-        return None
+        return _found(problem, "zeros", recorded, best) if 16 * best < recorded else None
     fits, M, c = {}, *_control_map(problem, states, raw)
-    changed = None if M is None else _describe(M, c, high - low, problem.system.control_names)
-    if changed:
+    if M is not None and _describe(M, c, high - low, problem.system.control_names):
         fits["mapped"] = (_mean_miss(problem, states, np.clip(raw @ M.T + c, low, high)), recorded)
     if L > 1:      # step k under the control of step k - 1 (shift -1) or k + 1 (shift 1), on the steps both have
         late, early = states[:, 1:], states[:, :-1]
@@ -279,17 +281,46 @@ def _control_motion(problem, states, controls):
     best = max(cut, key=cut.get, default=None)
     if best is None or cut[best] < 4:
         return None
-    if best == "mapped":
-        mild = not Found("mapped", "", M, c).unit_like   # also what other masses, gains or frictions give
-        what, hint = "fitted", (f"the controls that explain the steps are {changed}: " + (
-            "the system's parameters (a heavier system, a weaker actuator) or the units differ from the model's"
-            if mild else "check the units, signs and columns"))
+    return _found(problem, best, fits[best][1], fits[best][0], *((M, c) if best == "mapped" else ()))
+
+
+def _found(problem, kind, recorded, changed, M=None, c=None):
+    """The :class:`Found` of a change of ``kind`` whose steps miss by ``changed`` where the recorded controls' miss
+    by ``recorded`` (mean squared, cell widths)."""
+    if kind == "zeros":
+        return Found(kind, f"every recorded control is 0, but the motion needs others (a step with the best control of "
+                           f"the set misses the next state by {np.sqrt(changed):.3g} cell widths, rms; with 0 by "
+                           f"{np.sqrt(recorded):.3g}): were missing values written as 0? leave them empty")
+    if kind == "mapped":
+        span = problem.controls.max(axis=0) - problem.controls.min(axis=0)
+        mild = not Found(kind, "", M, c).unit_like   # also what other masses, gains or frictions give
+        what, hint = "fitted", (f"the controls that explain the steps are "
+                                f"{_describe(M, c, span, problem.system.control_names)}: " + (
+                                    "the system's parameters (a heavier system, a weaker actuator) or the units "
+                                    "differ from the model's" if mild else "check the units, signs and columns"))
     else:
         what, hint = "shifted", (f"the steps follow the control recorded one step (dt = {problem.dt:g} s) "
-                                 f"{'later' if best > 0 else 'earlier'}: each row's control acts from its t on")
-    return Found(best, f"the recorded controls do not explain the recorded motion: steps with them miss the next "
-                       f"state by {np.sqrt(fits[best][1]):.3g} cell widths (rms), steps with the {what} ones by "
-                       f"{np.sqrt(fits[best][0]):.2g}; {hint}", *((M, c) if best == "mapped" else ()))
+                                 f"{'later' if kind > 0 else 'earlier'}: each row's control acts from its t on")
+    return Found(kind, f"the recorded controls do not explain the recorded motion: steps with them miss the next "
+                       f"state by {np.sqrt(recorded):.3g} cell widths (rms), steps with the {what} ones by "
+                       f"{np.sqrt(changed):.2g}; {hint}", M, c)
+
+
+def _candidates(m):
+    """The changes tried as they are where a demonstration is too short to fit: each control's sign reversed or
+    times 10^k (k = -3..3, also all controls at once), two controls exchanged, the shift by one row either way,
+    zeros."""
+    eye, out = np.eye(m), []
+    for factor in (-1.0, 1e-3, 1e-2, 1e-1, 1e1, 1e2, 1e3):
+        for j in range(m):
+            M = eye.copy()
+            M[j, j] = factor
+            out.append(("mapped", M))
+        out += [("mapped", factor * eye)] if m > 1 and factor > 0 else []
+    for j in range(m):
+        for k in range(j + 1, m):
+            out.append(("mapped", eye[[k if i == j else j if i == k else i for i in range(m)]]))
+    return out + [(-1, None), (1, None), ("zeros", None)]
 
 
 def _steps(problem, states, controls=None):
