@@ -22,7 +22,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..demonstrations import Demonstrations
-from .plausible import check_plausible, step_misses
+from .misses import step_misses
+from .plausible import check_plausible
 from .recordings import align
 
 SUPPORT_WEIGHT = 1e-3
