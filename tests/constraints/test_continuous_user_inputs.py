@@ -261,21 +261,27 @@ def test_a_two_dimensional_control_set_is_read(tmp_path):
     assert problem.system.file == str((tmp_path / "planar.py").resolve())
 
 
+def _planar_recording(problem, n, seed):
+    """``n`` demonstrations of 12 steps of the planar system (it moves by u dt) under random controls of the set,
+    the zero control where a step would leave the box, as the CSV table."""
+    rng = np.random.default_rng(seed)
+    x, rows = np.tile([1.5, 1.0], (n, 1)), []
+    for k in range(13):
+        u = problem.controls[rng.integers(len(problem.controls), size=n)]
+        u[problem.grid.outside(x + 0.25 * u)] = 0.0
+        rows += [{"demo": f"d{d}", "t": 0.25 * k, "x": x[d, 0], "y": x[d, 1], "vx": u[d, 0], "vy": u[d, 1]}
+                 for d in range(n)]
+        x = x + 0.25 * u
+    return pd.DataFrame(rows)
+
+
 def test_one_control_of_two_with_its_sign_reversed_or_the_columns_exchanged_are_named(tmp_path):
-    """The planar system moves by u dt: recordings made with controls of the set (the zero control where a step
-    would leave the box), then 'vy' negated in the file: the warning names 'vy' (about -1 times) and not 'vx'
+    """Planar recordings with 'vy' negated in the file: the warning names 'vy' (about -1 times) and not 'vx'
     (whose recorded values explain the steps); then the two columns' names exchanged: both are named."""
     problem = load_system(_system(tmp_path)).problem
-    rng = np.random.default_rng(3)
-    x, rows = np.tile([1.5, 1.0], (3, 1)), []
-    for k in range(13):
-        u = problem.controls[rng.integers(len(problem.controls), size=3)]
-        u[problem.grid.outside(x + 0.25 * u)] = 0.0
-        rows += [{"demo": f"d{d}", "t": 0.25 * k, "x": x[d, 0], "y": x[d, 1], "vx": u[d, 0], "vy": -u[d, 1]}
-                 for d in range(3)]
-        x = x + 0.25 * u
+    frame = _planar_recording(problem, 3, seed=3)
     path = tmp_path / "planar.csv"
-    pd.DataFrame(rows).to_csv(path, index=False)
+    frame.assign(vy=-frame["vy"]).to_csv(path, index=False)
     with pytest.warns(InputWarning) as record:
         check_recording(problem, read_recording(path, problem.system.state_names, problem.system.control_names))
     message = " ".join(str(w.message) for w in record)
@@ -289,7 +295,6 @@ def test_one_control_of_two_with_its_sign_reversed_or_the_columns_exchanged_are_
     assert "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'" in message, message
 
 
-
 @pytest.mark.parametrize("change, phrase", [
     (lambda f: f.assign(vx=f["vy"], vy=f["vx"]),
      "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'"),
@@ -300,15 +305,7 @@ def test_one_demonstration_too_short_to_fit_is_still_named(change, phrase, tmp_p
     """Six planar demonstrations of 12 steps, one of them with a mistake: 12 steps are too few to fit a 2 x 2 map
     and offset (24 are needed), so the usual changes are tried as they are, and the one that explains it is named."""
     problem = load_system(_system(tmp_path)).problem
-    rng = np.random.default_rng(5)
-    x, rows = np.tile([1.5, 1.0], (6, 1)), []
-    for k in range(13):
-        u = problem.controls[rng.integers(len(problem.controls), size=6)]
-        u[problem.grid.outside(x + 0.25 * u)] = 0.0
-        rows += [{"demo": f"d{d}", "t": 0.25 * k, "x": x[d, 0], "y": x[d, 1], "vx": u[d, 0], "vy": u[d, 1]}
-                 for d in range(6)]
-        x = x + 0.25 * u
-    frame = pd.DataFrame(rows)
+    frame = _planar_recording(problem, 6, seed=5)
     odd = frame["demo"] == "d4"
     frame = pd.concat([frame[~odd], change(frame[odd])]).sort_index()
     path = tmp_path / "planar.csv"
