@@ -3,8 +3,6 @@ console script on the pendulum example, and in-process on the car example, on a 
 simulated by ``simulate`` (whose hidden limit inference must find), and on malformed input (exit 2, one line)."""
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pandas as pd
@@ -13,9 +11,7 @@ import pytest
 from mutual.cli import continuous as cli_continuous
 from mutual.cli import main
 
-ROOT = Path(__file__).resolve().parents[2]
-EXAMPLES = ROOT / "data" / "examples"
-SCRIPT = Path(sys.executable).with_name("mutual")
+from helpers.cli import EXAMPLES, console
 
 def double_integrator(low=-1.5, high=1.5, cells=15, dt=0.2, horizon=20, reward="", simulate=""):
     """A double-integrator system file heading for (1, 0) with the hidden wall velocity <= 0.5 in
@@ -54,10 +50,8 @@ def run_json(capsys, *argv):
 def test_infer_continuous_on_the_pendulum_example_through_the_console_script(tmp_path):
     """The example's hidden limit is theta_dot <= 5 rad/s: the accepted constraint is that bound at the
     fastest recorded speed (the tightest bound the demonstrations satisfy), inside its likelihood interval."""
-    command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "mutual.cli"]
-    run = subprocess.run(command + ["constraints", "infer-continuous", str(EXAMPLES / "pendulum_trajectories.csv"),
-                                    "--system", str(EXAMPLES / "pendulum.toml"), "--json", "--out", str(tmp_path)],
-                         capture_output=True, text=True, timeout=600)
+    run = console("constraints", "infer-continuous", EXAMPLES / "pendulum_trajectories.csv", "--system",
+                  EXAMPLES / "pendulum.toml", "--json", "--out", tmp_path, cwd=tmp_path)
     assert run.returncode == 0, run.stderr
     out = json.loads(run.stdout)
     first = out["chosen"][0]

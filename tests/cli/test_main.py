@@ -10,12 +10,12 @@ import pytest
 
 from mutual.cli import main
 
-from helpers.cli import EXAMPLES, ROOT, SCRIPT, mutual
+from helpers.cli import EXAMPLES, ROOT, SCRIPT, console
 
 
 def test_the_console_script_is_installed_and_help_is_fast_and_light():
     assert SCRIPT.exists(), "make env installs the package with its console script"
-    run = mutual("--help", cwd=ROOT)
+    run = console("--help", cwd=ROOT)
     assert run.returncode == 0
     for group in ("constraints", "supervisor", "study", "motion"):
         assert group in run.stdout

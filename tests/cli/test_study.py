@@ -160,13 +160,16 @@ PATHS = {
 }
 
 
-@pytest.mark.parametrize("path", PATHS, ids=list(PATHS))
-def test_statistics_commands_never_import_jax(path, tmp_path):
-    code = PATHS[path].replace("'OUT'", repr(str(tmp_path / "out"))) + (
-        f"\nimport sys; print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+def test_statistics_commands_never_import_jax(tmp_path):
+    """Each path, run one after another in one fresh process, leaves none of the heavy modules imported
+    (checked after each, so a failure names the first path that imported one)."""
+    check = f"import sys; print(PATH, sorted(m for m in {HEAVY!r} if m in sys.modules))"
+    code = "\n".join(f"PATH = {path!r}\n{line}\n{check}" for path, line in PATHS.items())
+    run = subprocess.run([sys.executable, "-c", code.replace("'OUT'", repr(str(tmp_path / "out")))],
+                         capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-2000:]
-    assert run.stdout.strip().splitlines()[-1] == "[]", run.stdout[-500:]
+    printed = [line for line in run.stdout.splitlines() if line.split(" [")[0] in PATHS]
+    assert printed == [f"{path} []" for path in PATHS], "\n".join(printed)
 
 
 FIXTURE = json.loads((Path(__file__).resolve().parents[1] / "data" / "pingouin_rm_anova.json").read_text())

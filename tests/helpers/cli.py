@@ -1,9 +1,13 @@
-"""Running the ``mutual`` console script on the examples and checking its one-line errors, shared by the
-command line's tests."""
+"""Running ``mutual`` on the examples and checking its one-line errors, shared by the command line's tests."""
 
+import io
+import os
 import subprocess
 import sys
+from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
+
+from mutual.cli import main
 
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -12,10 +16,27 @@ MALFORMED = EXAMPLES / "malformed"
 SCRIPT = Path(sys.executable).with_name("mutual")
 
 
-def mutual(*args, cwd):
-    """Run the installed console script (or ``python -m mutual.cli`` where it is not installed)."""
+def console(*args, cwd):
+    """Run the installed console script (or ``python -m mutual.cli`` where it is not installed) as its own process."""
     command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "mutual.cli"]
     return subprocess.run(command + [str(a) for a in args], cwd=cwd, capture_output=True, text=True, timeout=900)
+
+
+def mutual(*args, cwd):
+    """``mutual ARGS`` run in ``cwd`` in this process, as the console script runs it (``mutual.cli.main``; an
+    argparse usage error's exit too): a ``CompletedProcess`` with its exit status, stdout and stderr. The
+    libraries are imported once for every test, not once per command."""
+    out, err, here = io.StringIO(), io.StringIO(), os.getcwd()
+    os.chdir(cwd)
+    try:
+        with redirect_stdout(out), redirect_stderr(err):
+            try:
+                status = main([str(a) for a in args])
+            except SystemExit as stop:
+                status = stop.code
+    finally:
+        os.chdir(here)
+    return subprocess.CompletedProcess(["mutual", *map(str, args)], status, out.getvalue(), err.getvalue())
 
 
 def assert_one_line_error(run, *phrases):
