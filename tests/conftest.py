@@ -13,7 +13,6 @@ import threading
 import time
 from pathlib import Path
 
-import nbformat
 import pytest
 
 # The unit tests keep about 1.5 million long-lived objects (JAX's traces and programs, pandas, matplotlib); with
@@ -29,6 +28,8 @@ os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-"
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
 from mutual.compendium.paths import NOTEBOOKS
+
+import nbformat  # after mutual.compendium, which keeps jsonschema's 1.4 s IRI grammar from loading
 
 
 LANE_OUTPUT = Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "notebooks"  # the lane's own: a runner holds its folder

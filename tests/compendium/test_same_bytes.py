@@ -51,21 +51,26 @@ THREADS = {  # the thread settings of a 1-core and of a 2-core machine
 }
 
 
-def _run(tmp_path, threads):
+def _start(tmp_path, threads):
+    """The figures' program in a process of its own with ``threads``' settings, writing to its own folder."""
     out = tmp_path / f"threads-{threads}"
     out.mkdir()
     env = {k: v for k, v in os.environ.items() if k not in ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE")}
     env.update(THREADS[threads])
     env = {**env, **portable_env(env), "MUTUAL_OUTPUT_DIR": str(out), "SOURCE_DATE_EPOCH": "0"}
-    proc = subprocess.run([sys.executable, "-c", FIGURES_5_2_AND_5_5], env=env, capture_output=True, text=True,
-                          timeout=600)
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    return subprocess.Popen([sys.executable, "-c", FIGURES_5_2_AND_5_5], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True), out
+
+
+def _finish(proc, out):
+    stderr = proc.communicate(timeout=600)[1]
+    assert proc.returncode == 0, stderr[-3000:]
     return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(out.iterdir())}, out
 
 
 def test_figures_5_2_and_5_5_are_the_same_bytes_on_one_and_two_threads(tmp_path):
-    one, out_one = _run(tmp_path, 1)
-    two, out_two = _run(tmp_path, 2)
+    started = [_start(tmp_path, threads) for threads in (1, 2)]     # side by side: two processes, two folders
+    (one, out_one), (two, out_two) = [_finish(*run) for run in started]
     numbers = json.loads((out_one / "numbers.json").read_text()), json.loads((out_two / "numbers.json").read_text())
     assert numbers[0]["threads"] == "1" and numbers[1]["threads"] == "2"
     assert numbers[0]["mu_hat"] == numbers[1]["mu_hat"] and numbers[0]["states"] == numbers[1]["states"]

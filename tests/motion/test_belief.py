@@ -29,7 +29,9 @@ def test_prefix_marginal_matches_brute_force_integration():
     from mutual.motion.legible import reaching_cost
     J = reaching_cost(np.array([1.0]), dt=0.5, terminal_weight=2.0, effort_weight=1.0)
     mean, P = belief.lq_gaussian(dyn, J, np.zeros(1), 2)
-    grid = np.linspace(-12, 12, 4001)
+    # a Riemann sum of a smooth Gaussian converges faster than any power of the spacing: at 0.02 its error is
+    # far below rounding (exp(-2 pi^2 sigma^2 / h^2)), and the tails beyond 12 are below exp(-70)
+    grid = np.linspace(-12, 12, 1201)
     U0, U1 = np.meshgrid(grid, grid, indexing="ij")
     xN = 0.5 * (U0 + U1)
     cost = 2.0 * (xN - 1) ** 2 + 0.5 * (U0 ** 2 + U1 ** 2)
