@@ -65,7 +65,7 @@ def _odd_groups(problem, states, controls, alone=20):
         return []
     fits = [_control_motion(problem, states[odd], controls[odd])]
     fits += [_control_motion(problem, states[d:d + 1], controls[d:d + 1]) for d in odd[:alone]]
-    changes = [(f.kind, f.M, f.c) for f in fits if f and f.unit_like] + [(k, M, None) for k, M in _candidates(
+    changes = [(f.kind, f.M, f.c) for f in fits if f and _unit_like(f.kind, f.M)] + [(k, M, None) for k, M in _candidates(
         controls.shape[2])]
     zero = np.array([np.all(c[np.isfinite(c)] == 0) for c in controls])
     groups, left = [], np.asarray(odd)
@@ -74,8 +74,7 @@ def _odd_groups(problem, states, controls, alone=20):
         able = left[~zero[left]] if kind != "zeros" else left[zero[left]] if not zero.all() else left[:0]
         if not able.size:
             continue
-        found = Found(kind, "", M, c)
-        changed, recorded = _remedied(problem, states[able], controls[able], found)
+        changed, recorded = _remedied(problem, states[able], controls[able], kind, M, c)
         claimed = changed * (16 if kind == "zeros" else 4) < recorded
         if claimed.any():
             take = able[claimed]
@@ -85,15 +84,14 @@ def _odd_groups(problem, states, controls, alone=20):
     return groups
 
 
-def _remedied(problem, states, controls, found):
-    """Each demonstration's mean squared miss with ``found``'s change made to its recorded controls, and as
+def _remedied(problem, states, controls, kind, M=None, c=None):
+    """Each demonstration's mean squared miss with the change of ``kind`` made to its recorded controls, and as
     recorded, on the same steps."""
-    if found.kind == "mapped":
-        return per_demonstration(problem, states, controls @ found.M.T + found.c), per_demonstration(
-            problem, states, controls)
-    if found.kind == "zeros":
+    if kind == "mapped":
+        return per_demonstration(problem, states, controls @ M.T + c), per_demonstration(problem, states, controls)
+    if kind == "zeros":
         return per_demonstration(problem, states, None), per_demonstration(problem, states, controls)
-    if found.kind == -1:        # step k under the control of step k - 1
+    if kind == -1:        # step k under the control of step k - 1
         return (per_demonstration(problem, states[:, 1:], controls[:, :-1]),
                 per_demonstration(problem, states[:, 1:], controls[:, 1:]))
     return (per_demonstration(problem, states[:, :-1], controls[:, 1:]),
@@ -109,34 +107,34 @@ class Found(NamedTuple):
     M: np.ndarray | None = None
     c: np.ndarray | None = None
 
-    @property
-    def unit_like(self):
-        """Whether it is a change of unit (a factor beyond [0.5, 2]), sign or columns, a shift or zeros."""
-        if self.kind != "mapped":
-            return True
-        column = np.argmax(np.abs(self.M), axis=1)
-        factor = self.M[np.arange(len(self.M)), column]
-        return bool(np.any(column != np.arange(len(self.M))) or np.any((factor < 0.5) | (factor > 2)))
+
+def _unit_like(kind, M=None):
+    """Whether a change of ``kind`` (by ``M``) is one of unit (a factor beyond [0.5, 2]), sign or columns, a shift
+    or zeros."""
+    if kind != "mapped":
+        return True
+    column = np.argmax(np.abs(M), axis=1)
+    factor = M[np.arange(len(M)), column]
+    return bool(np.any(column != np.arange(len(M))) or np.any((factor < 0.5) | (factor > 2)))
 
 
 def _control_motion(problem, states, controls):
     """The :class:`Found` of :func:`check_control_motion`, or None."""
     L, m = controls.shape[1], controls.shape[2]
-    low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
-    raw, controls = controls, np.clip(controls, low, high)     # what acted at most: the set's range
-    u = raw.reshape(-1, m)
+    u = controls.reshape(-1, m)
     u = u[np.isfinite(u).all(axis=1)]
     if len(u) < 4 * (m * m + m):                               # too few steps to fit M and c
         return None
-    recorded = mean_miss(problem, states, controls)
+    recorded = mean_miss(problem, states, controls)            # clipped to the set's range: what acted at most
     if not recorded > 0.02 ** 2:
         return None
     if np.all(u == 0):
         best = mean_miss(problem, states, None)               # each step's best control: fits noise too, so 16x
         return _found(problem, "zeros", recorded, best) if 16 * best < recorded else None
-    fits, M, c = {}, *_control_map(problem, states, raw)
-    if M is not None and _describe(M, c, high - low, problem.system.control_names):
-        fits["mapped"] = (mean_miss(problem, states, np.clip(raw @ M.T + c, low, high)), recorded)
+    fits, M, c = {}, *_control_map(problem, states, controls)
+    span = problem.controls.max(axis=0) - problem.controls.min(axis=0)
+    if M is not None and _describe(M, c, span, problem.system.control_names):
+        fits["mapped"] = (mean_miss(problem, states, controls @ M.T + c), recorded)
     if L > 1:      # step k under the control of step k - 1 (shift -1) or k + 1 (shift 1), on the steps both have
         late, early = states[:, 1:], states[:, :-1]
         fits[-1] = (mean_miss(problem, late, controls[:, :-1]), mean_miss(problem, late, controls[:, 1:]))
@@ -157,7 +155,7 @@ def _found(problem, kind, recorded, changed, M=None, c=None):
                            f"{np.sqrt(recorded):.3g}): were missing values written as 0? leave them empty")
     if kind == "mapped":
         span = problem.controls.max(axis=0) - problem.controls.min(axis=0)
-        mild = not Found(kind, "", M, c).unit_like   # also what other masses, gains or frictions give
+        mild = not _unit_like(kind, M)      # also what other masses, gains or frictions give
         what, hint = "fitted", (f"the controls that explain the steps are "
                                 f"{_describe(M, c, span, problem.system.control_names)}: " + (
                                     "the system's parameters (a heavier system, a weaker actuator) or the units "

@@ -22,41 +22,46 @@ def recorded_steps(problem, states, controls=None):
     return x[ok], nxt[ok], u[ok]
 
 
-def mean_miss(problem, states, controls):
-    """The mean squared miss (cell widths) of one step from states[:, k] under controls[:, k] to states[:, k + 1]
-    over the recorded steps; controls None: under the best control of the set, step by step."""
-    x, nxt, u = recorded_steps(problem, states, controls)
-    if u is None:
-        return float(np.mean(step_misses(problem, x, nxt).min(axis=1) ** 2))
-    return float(np.mean(distance(problem.grid, problem.step(x, u), nxt) ** 2)) if len(u) else 0.0
-
-
-def per_demonstration(problem, states, controls):
-    """Each demonstration's mean squared miss (cell widths) of its steps under ``controls`` (N, L, m), clipped to
-    the set's range, where recorded (None: the best control of the set, step by step); NaN without a step."""
-    N, L, n = states.shape[0], states.shape[1] - 1, states.shape[2]
+def squared_misses(problem, states, controls=None):
+    """(N, L): each recorded step's squared miss (cell widths) from states[:, k] to states[:, k + 1] under
+    ``controls`` (N, L, m) clipped to the set's range (what acted at most), NaN where a control is not recorded;
+    controls None: under the best control of the set, step by step."""
+    N, L = states.shape[0], states.shape[1] - 1
     x, nxt, _ = recorded_steps(problem, states)
-    squared, ok = np.zeros(N * L), np.ones(N * L, bool)
     if controls is None:
-        squared = step_misses(problem, x, nxt).min(axis=1) ** 2
-    else:
-        u = np.clip(controls.reshape(N * L, -1), problem.controls.min(axis=0), problem.controls.max(axis=0))
-        ok = np.isfinite(u).all(axis=1)
-        squared[ok] = distance(problem.grid, problem.step(x[ok], u[ok]), nxt[ok]) ** 2
-    counts = ok.reshape(N, L).sum(axis=1)
-    return np.where(counts > 0, squared.reshape(N, L).sum(axis=1) / np.maximum(counts, 1), np.nan)
+        return (step_misses(problem, x, nxt).min(axis=1) ** 2).reshape(N, L)
+    u = np.clip(controls.reshape(N * L, -1), problem.controls.min(axis=0), problem.controls.max(axis=0))
+    ok, squared = np.isfinite(u).all(axis=1), np.full(N * L, np.nan)
+    squared[ok] = distance(problem.grid, problem.step(x[ok], u[ok]), nxt[ok]) ** 2
+    return squared.reshape(N, L)
+
+
+def mean_miss(problem, states, controls=None):
+    """The mean of :func:`squared_misses` over the steps with a control (0.0 without one)."""
+    squared = squared_misses(problem, states, controls)
+    return float(np.nanmean(squared)) if np.isfinite(squared).any() else 0.0
+
+
+def per_demonstration(problem, states, controls=None):
+    """Each demonstration's mean of :func:`squared_misses` (NaN without a step with a control)."""
+    squared = squared_misses(problem, states, controls)
+    counts = np.isfinite(squared).sum(axis=1)
+    return np.where(counts > 0, np.nansum(squared, axis=1) / np.maximum(counts, 1), np.nan)
+
+
+def narrowest(grid):
+    """Each coordinate's narrowest cell width (n,): the unit misses are counted in."""
+    return np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
 
 
 def difference(grid, a, b, widths=None):
     """a - b in cell widths, periodic coordinates the short way round; ``widths`` the cell widths to count in
-    (broadcast against a - b), by default each coordinate's narrowest."""
+    (broadcast against a - b), by default :func:`narrowest`."""
     diff = a - b
     for i in np.flatnonzero(grid.periodic):
         period = grid.high[i] - grid.low[i]
         diff[..., i] = np.mod(diff[..., i] + period / 2, period) - period / 2
-    if widths is None:
-        widths = np.array([np.min(grid.widths_1d(i)) for i in range(grid.ndim)])
-    return diff / widths
+    return diff / (narrowest(grid) if widths is None else widths)
 
 
 def distance(grid, a, b, widths=None):

@@ -12,7 +12,7 @@ import numpy as np
 
 from ...inputs import angle_unit_warning, warn
 from .controlcheck import check_control_motion
-from .misses import distance, mean_miss, recorded_steps, spread, step_misses
+from .misses import distance, mean_miss, narrowest, recorded_steps, spread, step_misses
 
 
 def check_plausible(problem, recording, states, controls, index):
@@ -64,8 +64,7 @@ def _recorded_miss(problem, states, controls):
     if controls is None:
         return np.inf
     try:
-        low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
-        return mean_miss(problem, states, np.clip(controls, low, high))
+        return mean_miss(problem, states, controls)
     except ValueError:
         return np.inf
 
@@ -78,9 +77,7 @@ def _as_degrees(problem, states, i, most=2000):
     x, nxt = states[:, :-1].reshape(-1, n), states[:, 1:].reshape(-1, n)
     pick = spread(len(x), most)
     x, nxt = x[pick], nxt[pick]
-    radians = np.where(np.arange(n) == i, np.pi / 180, 1.0)
-
-    widths = np.array([np.min(problem.grid.widths_1d(j)) for j in range(n)])
+    radians, widths = np.where(np.arange(n) == i, np.pi / 180, 1.0), narrowest(problem.grid)
 
     def miss(a, b, unit=1.0):   # in the recorded units: noise on the angle is not shrunk with it
         wrap = problem.grid.wrap
