@@ -166,19 +166,19 @@ def test_an_unmodelled_force_in_some_demonstrations_is_not_blamed_on_units(tmp_p
         check_recording(problem, read_recording(path, SYSTEM.state_names, SYSTEM.control_names))
 
 
-def _unicycle(rate, heading, degrees=False, noise=0.0, dt=2.0):
-    """A unicycle recorded every ``dt`` s under random turn rates of the set [-rate, 0, rate] rad/s from headings
-    in [-heading, heading]; its heading column in degrees when ``degrees``, with measurement noise of ``noise``
-    rad."""
+def _unicycle(rate, heading, degrees=False, noise=0.0, dt=2.0, levels=None):
+    """A unicycle recorded every ``dt`` s under random turn rates of [-rate, 0, rate] rad/s (the control set, or
+    ``levels``) from headings in [-heading, heading]; its heading column in degrees when ``degrees``, with
+    measurement noise of ``noise`` rad."""
     system = named_system("unicycle", {"speed": 1.0})
     grid = Grid.uniform([-40.0, -40.0, -np.pi], [40.0, 40.0, np.pi], [40, 40, 12], [False, False, True],
                         system.state_names, system.state_units)
-    levels = [-rate, 0.0, rate]
-    problem = Problem(system, grid, levels, dt, 20, QuadraticReward([0, 0, 0], [1, 1, 0], [0.0], [1, 1, 0]))
+    drive = [-rate, 0.0, rate]
+    problem = Problem(system, grid, levels or drive, dt, 20, QuadraticReward([0, 0, 0], [1, 1, 0], [0.0], [1, 1, 0]))
     rng = np.random.default_rng(3)
     x, rows = rng.uniform([-1, -1, -heading], [1, 1, heading], (8, 3)), []
     for k in range(11):
-        u = rng.choice(levels, size=(8, 1))
+        u = rng.choice(drive, size=(8, 1))
         rows += [{"demo": f"d{d}", "t": dt * k, "x": x[d, 0], "y": x[d, 1],
                   "heading": (np.degrees if degrees else float)(x[d, 2] + noise * rng.normal()),
                   "turn_rate": u[d, 0] if k < 10 else np.nan}
@@ -207,6 +207,36 @@ def test_fast_turns_that_the_dynamics_make_are_not_taken_for_degrees(rate, headi
         check_recording(problem, recording)
     said = [str(w.message) for w in record if "look like degrees" in str(w.message)]
     assert bool(said) == warned, said
+
+
+def _said(problem, frame, path):
+    """The InputWarnings that checking ``frame`` (written to ``path``) gives."""
+    frame.to_csv(path, index=False)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always", InputWarning)
+        check_recording(problem, read_recording(path, problem.system.state_names, problem.system.control_names))
+    return [str(w.message) for w in record]
+
+
+@pytest.mark.parametrize("dt, rate", [(2, 1.5), (4, 1.5), (4, 0.75), (5, 0.75)])
+def test_a_reversed_turn_rate_is_named_where_a_step_is_far_from_linear_in_it(dt, rate, tmp_path):
+    """A unicycle turning up to 7.5 rad a step: the linearised fit of the controls' map misses a reversed sign (it
+    finds a factor of 0.04, or -0.12), so the usual mistakes are tried as they are and the sign is named; the same
+    recording with its controls as recorded says nothing."""
+    problem, frame = _unicycle(rate, np.pi, dt=dt)
+    assert _said(problem, frame, tmp_path / "u.csv") == []
+    said = _said(problem, frame.assign(turn_rate=-frame["turn_rate"]), tmp_path / "reversed.csv")
+    assert len(said) == 1 and "'turn_rate' about -1 times the recorded one (its sign looks reversed)" in said[0]
+
+
+def test_turn_rates_in_degrees_per_second_are_named_as_degrees(tmp_path):
+    """Turns of 0.05 rad/s recorded as 2.86 deg/s lie within the set's range (up to 3 rad/s), so only the motion
+    tells: the map that explains it is pi/180, which is named as degrees."""
+    problem, frame = _unicycle(0.05, np.pi, dt=1.0, levels=[-3.0, -0.05, 0.0, 0.05, 3.0])
+    assert _said(problem, frame, tmp_path / "u.csv") == []
+    said = _said(problem, frame.assign(turn_rate=np.degrees(frame["turn_rate"])), tmp_path / "degrees.csv")
+    assert len(said) == 1 and "'turn_rate' about 0.01745 times the recorded one (recorded in degrees where the model " \
+                               "takes radians?)" in said[0], said
 
 
 # ---- system files -------------------------------------------------------------------------------

@@ -13,7 +13,8 @@ from .misses import difference, mean_miss, per_demonstration, recorded_steps, sp
 def check_control_motion(problem, recording, states, controls, most=4000):
     """Warn when the recorded controls do not explain the recorded motion: one step is close to linear in the
     control, so the map M (m x m) and offset c for which steps under M u + c best explain the motion are fitted
-    by least squares (and steps under the control one step of dt earlier or later are tried); when one of them
+    by least squares (the usual mistakes, :func:`_candidates`, are tried as they are too, for steps far from
+    linear, and steps under the control one step of dt earlier or later); when one of them
     cuts the mean squared miss of the next states to a quarter of what the controls as recorded give (clipped to
     the set's range, as the models take them), and the miss is more than a fiftieth of a cell, what changed is
     named: a factor per control, exchanged columns, an offset, or the shift. Every recorded control 0 while the
@@ -135,6 +136,9 @@ def _control_motion(problem, states, controls):
     span = problem.controls.max(axis=0) - problem.controls.min(axis=0)
     if M is not None and _describe(M, c, span, problem.system.control_names):
         fits["mapped"] = (mean_miss(problem, states, controls @ M.T + c), recorded)
+    usual = _best_usual(problem, states, controls, u)   # for steps far from linear in the control (turns of radians)
+    if usual and 4 * usual[0] < fits.get("mapped", (recorded,))[0]:           # which the linearised fit misses
+        M, c, fits["mapped"] = usual[1], np.zeros(m), (usual[0], recorded)
     if L > 1:      # step k under the control of step k - 1 (shift -1) or k + 1 (shift 1), on the steps both have
         late, early = states[:, 1:], states[:, :-1]
         fits[-1] = (mean_miss(problem, late, controls[:, :-1]), mean_miss(problem, late, controls[:, 1:]))
@@ -156,7 +160,7 @@ def _found(problem, kind, recorded, changed, M=None, c=None):
     if kind == "mapped":
         span = problem.controls.max(axis=0) - problem.controls.min(axis=0)
         mild = not _unit_like(kind, M)      # also what other masses, gains or frictions give
-        what, hint = "fitted", (f"the controls that explain the steps are "
+        what, hint = "changed", (f"the controls that explain the steps are "
                                 f"{_describe(M, c, span, problem.system.control_names)}: " + (
                                     "the system's parameters (a heavier system, a weaker actuator) or the units "
                                     "differ from the model's" if mild else "check the units, signs and columns"))
@@ -169,11 +173,12 @@ def _found(problem, kind, recorded, changed, M=None, c=None):
 
 
 def _candidates(m):
-    """The changes tried as they are where a demonstration is too short to fit: each control's sign reversed or
-    times 10^k (k = -3..3, also all controls at once), two controls exchanged, the shift by one row either way,
-    zeros."""
+    """The changes tried as they are beside the fitted map (which a step far from linear in the control escapes)
+    and where a demonstration is too short to fit: each control's sign reversed, times 10^k (k = -3..3) or
+    pi/180 and 180/pi (degrees and radians), also all controls at once, two controls exchanged, the shift by one
+    row either way, zeros."""
     eye, out = np.eye(m), []
-    for factor in (-1.0, 1e-3, 1e-2, 1e-1, 1e1, 1e2, 1e3):
+    for factor in (-1.0, 1e-3, 1e-2, 1e-1, 1e1, 1e2, 1e3, np.pi / 180, 180 / np.pi):
         for j in range(m):
             M = eye.copy()
             M[j, j] = factor
@@ -183,6 +188,21 @@ def _candidates(m):
         for k in range(j + 1, m):
             out.append(("mapped", eye[[k if i == j else j if i == k else i for i in range(m)]]))
     return out + [(-1, None), (1, None), ("zeros", None)]
+
+
+def _best_usual(problem, states, controls, u):
+    """``(miss, M)``: the usual mistake (:func:`_candidates`, as it is) whose steps miss least (mean squared, cell
+    widths), among those that keep the recorded controls ``u`` (k, m) within the set's range; None if none does."""
+    usual = [M for kind, M in _candidates(u.shape[1]) if kind == "mapped" and _within(problem, u @ M.T)]
+    return min(((mean_miss(problem, states, controls @ M.T), M) for M in usual), key=lambda pair: pair[0], default=None)
+
+
+def _within(problem, u, share=0.95):
+    """Whether ``share`` of the controls u (k, m) lie within the set's range, give or take a tenth of it: a change
+    that puts the recorded controls far outside it would explain steps only by the clipping to the range."""
+    low, high = problem.controls.min(axis=0), problem.controls.max(axis=0)
+    slack = 0.1 * (high - low)
+    return bool(np.mean(np.all((u >= low - slack) & (u <= high + slack), axis=1)) >= share)
 
 
 def _control_map(problem, states, controls):
@@ -208,6 +228,10 @@ def _control_map(problem, states, controls):
     return fit[:m * m].reshape(m, m), offset
 
 
+DEGREES = ((np.pi / 180, "recorded in degrees where the model takes radians?"),
+           (180 / np.pi, "recorded in radians where the model takes degrees?"))
+
+
 def _describe(M, c, span, names):
     """``'torque' about 1000 times the recorded one``, ``'vx' about 1 times the recorded 'vy'`` (the largest
     entry of each row), ``minus 1.5`` (an offset beyond a tenth of the set's range), for the controls changed;
@@ -220,5 +244,6 @@ def _describe(M, c, span, names):
             continue
         one = "one" if j == i else repr(names[j])
         sign = " (its sign looks reversed)" if j == i and row[j] < 0 else ""
+        sign += next((f" ({said})" for factor, said in DEGREES if j == i and abs(row[j] / factor - 1) < 0.02), "")
         out.append(f"{names[i]!r} about {row[j] + 0.0:.4g} times the recorded {one}{offset}{sign}")
     return ", ".join(out)
