@@ -166,10 +166,10 @@ def test_an_unmodelled_force_in_some_demonstrations_is_not_blamed_on_units(tmp_p
         check_recording(problem, read_recording(path, SYSTEM.state_names, SYSTEM.control_names))
 
 
-def _unicycle(rate, heading, degrees=False, noise=0.0, dt=2.0, levels=None):
+def _unicycle(rate, heading, degrees=False, noise=0.0, dt=2.0, levels=None, noise_xy=0.0):
     """A unicycle recorded every ``dt`` s under random turn rates of [-rate, 0, rate] rad/s (the control set, or
     ``levels``) from headings in [-heading, heading]; its heading column in degrees when ``degrees``, with
-    measurement noise of ``noise`` rad."""
+    measurement noise of ``noise`` rad (and ``noise_xy`` m on the position)."""
     system = named_system("unicycle", {"speed": 1.0})
     grid = Grid.uniform([-40.0, -40.0, -np.pi], [40.0, 40.0, np.pi], [40, 40, 12], [False, False, True],
                         system.state_names, system.state_units)
@@ -179,7 +179,8 @@ def _unicycle(rate, heading, degrees=False, noise=0.0, dt=2.0, levels=None):
     x, rows = rng.uniform([-1, -1, -heading], [1, 1, heading], (8, 3)), []
     for k in range(11):
         u = rng.choice(drive, size=(8, 1))
-        rows += [{"demo": f"d{d}", "t": dt * k, "x": x[d, 0], "y": x[d, 1],
+        xy = x[:, :2] + noise_xy * rng.normal(size=(8, 2)) if noise_xy else x[:, :2]
+        rows += [{"demo": f"d{d}", "t": dt * k, "x": xy[d, 0], "y": xy[d, 1],
                   "heading": (np.degrees if degrees else float)(x[d, 2] + noise * rng.normal()),
                   "turn_rate": u[d, 0] if k < 10 else np.nan}
                  for d in range(8)]
@@ -218,12 +219,14 @@ def _said(problem, frame, path):
     return [str(w.message) for w in record]
 
 
-@pytest.mark.parametrize("dt, rate", [(2, 1.5), (4, 1.5), (4, 0.75), (5, 0.75)])
-def test_a_reversed_turn_rate_is_named_where_a_step_is_far_from_linear_in_it(dt, rate, tmp_path):
+@pytest.mark.parametrize("dt, rate, noise", [(2, 1.5, 0), (4, 1.5, 0), (4, 0.75, 0), (5, 0.75, 0), (3, 1.5, 0.3),
+                                             (5, 1.5, 0.3)])
+def test_a_reversed_turn_rate_is_named_where_a_step_is_far_from_linear_in_it(dt, rate, noise, tmp_path):
     """A unicycle turning up to 7.5 rad a step: the linearised fit of the controls' map misses a reversed sign (it
-    finds a factor of 0.04, or -0.12), so the usual mistakes are tried as they are and the sign is named; the same
-    recording with its controls as recorded says nothing."""
-    problem, frame = _unicycle(rate, np.pi, dt=dt)
+    finds a factor of 0.04, or -0.12, or with 0.3 m and rad of noise 0.33, which explains the steps roughly), so
+    the usual mistakes are tried as they are and the sign is named; the same recording with its controls as
+    recorded says nothing."""
+    problem, frame = _unicycle(rate, np.pi, dt=dt, noise=noise, noise_xy=noise)
     assert _said(problem, frame, tmp_path / "u.csv") == []
     said = _said(problem, frame.assign(turn_rate=-frame["turn_rate"]), tmp_path / "reversed.csv")
     assert len(said) == 1 and "'turn_rate' about -1 times the recorded one (its sign looks reversed)" in said[0]
@@ -237,6 +240,52 @@ def test_turn_rates_in_degrees_per_second_are_named_as_degrees(tmp_path):
     said = _said(problem, frame.assign(turn_rate=np.degrees(frame["turn_rate"])), tmp_path / "degrees.csv")
     assert len(said) == 1 and "'turn_rate' about 0.01745 times the recorded one (recorded in degrees where the model " \
                                "takes radians?)" in said[0], said
+
+
+CAR = """\
+system = "car:f"
+[state]
+names = ["x", "y", "heading"]
+units = ["m", "m", "rad"]
+low = [-60.0, -60.0, -3.141592653589793]
+high = [60.0, 60.0, 3.141592653589793]
+cells = [40, 40, 12]
+periodic = ["heading"]
+[control]
+names = ["v", "w"]
+units = ["m/s", "rad/s"]
+values = [[-1.0, -1.5], [-1.0, 0.0], [-1.0, 1.5], [0.0, 0.0], [1.0, -1.5], [1.0, 0.0], [1.0, 1.5], [0.5, 0.75]]
+[time]
+dt = 4.0
+horizon = 40
+[reward]
+goal = [0.0, 0.0, 0.0]
+"""
+
+
+@pytest.mark.parametrize("change, phrase", [
+    (lambda f: f.assign(v=-f["v"], w=-f["w"]), "'v' about -1 times the recorded one (its sign looks reversed), "
+                                                "'w' about -1 times the recorded one (its sign looks reversed)"),
+    (lambda f: f.assign(v=-f["w"], w=f["v"]), "'v' about 1 times the recorded 'w', 'w' about -1 times the recorded 'v'")],
+    ids=["both signs reversed", "columns exchanged and one reversed"])
+def test_two_controls_far_from_linear_with_every_sign_or_an_exchange_and_a_sign_are_named(change, phrase, tmp_path):
+    """A car (speed v, turn rate w) recorded every 4 s turns up to 6 rad a step: the linearised fit named 'v' about
+    -0.13 and 'w' about 0.57, or nothing; every sign reversed and an exchange with a sign are usual mistakes too."""
+    (tmp_path / "car.py").write_text("import numpy as np\ndef f(x, u):\n    h = x[:, 2]\n    return np.stack("
+                                     "[u[:, 0] * np.cos(h), u[:, 0] * np.sin(h), u[:, 1]], axis=1)\n")
+    (tmp_path / "car.toml").write_text(CAR)
+    problem = load_system(tmp_path / "car.toml").problem
+    rng = np.random.default_rng(4)
+    x, rows = rng.uniform([-1, -1, -np.pi], [1, 1, np.pi], (10, 3)), []
+    for k in range(13):
+        u = problem.controls[rng.integers(len(problem.controls), size=10)]
+        rows += [{"demo": f"d{d}", "t": 4.0 * k, "x": x[d, 0], "y": x[d, 1], "heading": x[d, 2],
+                  "v": u[d, 0] if k < 12 else np.nan, "w": u[d, 1] if k < 12 else np.nan} for d in range(10)]
+        x = problem.grid.wrap(integrate(problem.system, x, u, 4.0))
+    frame = pd.DataFrame(rows)
+    assert _said(problem, frame, tmp_path / "car.csv") == []
+    said = _said(problem, change(frame), tmp_path / "changed.csv")
+    assert len(said) == 1 and phrase in said[0], said
 
 
 # ---- system files -------------------------------------------------------------------------------

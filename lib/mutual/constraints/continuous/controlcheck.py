@@ -13,8 +13,8 @@ from .misses import difference, mean_miss, per_demonstration, recorded_steps, sp
 def check_control_motion(problem, recording, states, controls, most=4000):
     """Warn when the recorded controls do not explain the recorded motion: one step is close to linear in the
     control, so the map M (m x m) and offset c for which steps under M u + c best explain the motion are fitted
-    by least squares (the usual mistakes, :func:`_candidates`, are tried as they are too, for steps far from
-    linear, and steps under the control one step of dt earlier or later); when one of them
+    by least squares (and the usual mistakes of :func:`_candidates` are tried as they are, for steps far from linear
+    in the control; and steps under the control one step of dt earlier or later); when one of them
     cuts the mean squared miss of the next states to a quarter of what the controls as recorded give (clipped to
     the set's range, as the models take them), and the miss is more than a fiftieth of a cell, what changed is
     named: a factor per control, exchanged columns, an offset, or the shift. Every recorded control 0 while the
@@ -36,7 +36,7 @@ def check_control_motion(problem, recording, states, controls, most=4000):
         warn(f"{recording.source}, {where}: {found.text}")
     for group, found in groups:
         ids = ", ".join(repr(recording.ids[d]) for d in group[:5]) + (", ..." if len(group) > 5 else "")
-        units = "; were they recorded in other units?" if found.kind == "mapped" else ""
+        units = "; were they recorded in other units?" if found.kind == "mapped" and _scaled(found.M) else ""
         warn(f"{recording.source}, {where}: demonstrations {ids} ({len(group)} of {len(states)}) follow their recorded "
              f"controls far worse than the others do: {found.text}{units}")
 
@@ -54,18 +54,19 @@ def _odd(problem, states, controls):
     return odd[np.argsort(-miss[odd], kind="stable")]
 
 
-def _odd_groups(problem, states, controls, alone=20):
+def _odd_groups(problem, states, controls, alone=20, most=4000):
     """``[(demonstrations, found)]``: the demonstrations that stand out (:func:`_odd`) and what explains them where
     it is a change of unit, sign or columns, a shift or zeros (an offset or a mild factor is also what an
-    unmodelled force or a weaker actuator gives). The changes: fitted to them together and to the worst ``alone``
-    each alone (:func:`_control_motion`), then the :func:`_candidates` as they are (a demonstration too short to
-    fit); each in turn claims every demonstration left whose miss it cuts to a quarter (zeros: a sixteenth, and
+    unmodelled force or a weaker actuator gives). The changes: fitted to them together (on up to ``most`` steps)
+    and to the worst ``alone`` each alone (:func:`_control_motion`), then the :func:`_candidates` as they are (a
+    demonstration too short to fit, steps far from linear in the control); each in turn claims every demonstration left whose miss it cuts to a quarter (zeros: a sixteenth, and
     only where every control of the demonstration is 0 and others are not)."""
     odd = _odd(problem, states, controls) if len(states) > 1 else []
     if len(odd) == 0:
         return []
-    fits = [_control_motion(problem, states[odd], controls[odd])]
-    fits += [_control_motion(problem, states[d:d + 1], controls[d:d + 1]) for d in odd[:alone]]
+    together = odd[spread(len(odd), most // max(states.shape[1], 1))]
+    fits = [_control_motion(problem, states[together], controls[together], usual=False)]
+    fits += [_control_motion(problem, states[d:d + 1], controls[d:d + 1], usual=False) for d in odd[:alone]]
     changes = [(f.kind, f.M, f.c) for f in fits if f and _unit_like(f.kind, f.M)] + [(k, M, None) for k, M in _candidates(
         controls.shape[2])]
     zero = np.array([np.all(c[np.isfinite(c)] == 0) for c in controls])
@@ -115,12 +116,19 @@ def _unit_like(kind, M=None):
     if kind != "mapped":
         return True
     column = np.argmax(np.abs(M), axis=1)
-    factor = M[np.arange(len(M)), column]
-    return bool(np.any(column != np.arange(len(M))) or np.any((factor < 0.5) | (factor > 2)))
+    return bool(np.any(column != np.arange(len(M))) or np.any(M[np.arange(len(M)), column] < 0) or _scaled(M))
 
 
-def _control_motion(problem, states, controls):
-    """The :class:`Found` of :func:`check_control_motion`, or None."""
+def _scaled(M):
+    """Whether a control's largest entry of ``M`` is a factor beyond [0.5, 2] in size (a unit, not a sign or an
+    exchange)."""
+    size = np.abs(M).max(axis=1)
+    return bool(np.any((size < 0.5) | (size > 2)))
+
+
+def _control_motion(problem, states, controls, usual=True):
+    """The :class:`Found` of :func:`check_control_motion`, or None; ``usual``: try the usual mistakes as they are
+    too (:func:`_best_usual`)."""
     L, m = controls.shape[1], controls.shape[2]
     u = controls.reshape(-1, m)
     u = u[np.isfinite(u).all(axis=1)]
@@ -133,12 +141,11 @@ def _control_motion(problem, states, controls):
         best = mean_miss(problem, states, None)               # each step's best control: fits noise too, so 16x
         return _found(problem, "zeros", recorded, best) if 16 * best < recorded else None
     fits, M, c = {}, *_control_map(problem, states, controls)
-    span = problem.controls.max(axis=0) - problem.controls.min(axis=0)
-    if M is not None and _describe(M, c, span, problem.system.control_names):
+    if M is not None and _describe(M, c, problem):
         fits["mapped"] = (mean_miss(problem, states, controls @ M.T + c), recorded)
-    usual = _best_usual(problem, states, controls, u)   # for steps far from linear in the control (turns of radians)
-    if usual and 4 * usual[0] < fits.get("mapped", (recorded,))[0]:           # which the linearised fit misses
-        M, c, fits["mapped"] = usual[1], np.zeros(m), (usual[0], recorded)
+    best = _best_usual(problem, states, controls, u) if usual else None   # for steps far from linear in the control
+    if best and best[0] * _margin(fits, M) < fits.get("mapped", (recorded,))[0]:    # (turns of radians), which the
+        M, c, fits["mapped"] = best[1], np.zeros(m), (best[0], recorded)           # linearised fit misses
     if L > 1:      # step k under the control of step k - 1 (shift -1) or k + 1 (shift 1), on the steps both have
         late, early = states[:, 1:], states[:, :-1]
         fits[-1] = (mean_miss(problem, late, controls[:, :-1]), mean_miss(problem, late, controls[:, 1:]))
@@ -158,10 +165,9 @@ def _found(problem, kind, recorded, changed, M=None, c=None):
                            f"the set misses the next state by {np.sqrt(changed):.3g} cell widths, rms; with 0 by "
                            f"{np.sqrt(recorded):.3g}): were missing values written as 0? leave them empty")
     if kind == "mapped":
-        span = problem.controls.max(axis=0) - problem.controls.min(axis=0)
         mild = not _unit_like(kind, M)      # also what other masses, gains or frictions give
         what, hint = "changed", (f"the controls that explain the steps are "
-                                f"{_describe(M, c, span, problem.system.control_names)}: " + (
+                                f"{_describe(M, c, problem)}: " + (
                                     "the system's parameters (a heavier system, a weaker actuator) or the units "
                                     "differ from the model's" if mild else "check the units, signs and columns"))
     else:
@@ -174,20 +180,27 @@ def _found(problem, kind, recorded, changed, M=None, c=None):
 
 def _candidates(m):
     """The changes tried as they are beside the fitted map (which a step far from linear in the control escapes)
-    and where a demonstration is too short to fit: each control's sign reversed, times 10^k (k = -3..3) or
-    pi/180 and 180/pi (degrees and radians), also all controls at once, two controls exchanged, the shift by one
-    row either way, zeros."""
-    eye, out = np.eye(m), []
-    for factor in (-1.0, 1e-3, 1e-2, 1e-1, 1e1, 1e2, 1e3, np.pi / 180, 180 / np.pi):
+    and where a demonstration is too short to fit: no, one or every sign reversed, with or without two controls
+    exchanged; each control or all at once times 10^k (k = -3..3, not 0), pi/180 or 180/pi (degrees and radians);
+    the shift by one row either way; zeros."""
+    eye = np.eye(m)
+    swaps = [eye] + [eye[[k if i == j else j if i == k else i for i in range(m)]] for j in range(m) for k in range(j + 1, m)]
+    signs = [np.ones(m)] + [np.where(np.arange(m) == j, -1.0, 1.0) for j in range(m)] + [-np.ones(m)] * (m > 1)
+    out = [("mapped", sign[:, None] * P) for P in swaps for sign in signs][1:]       # all but the identity
+    for factor in (1e-3, 1e-2, 1e-1, 1e1, 1e2, 1e3, np.pi / 180, 180 / np.pi):
         for j in range(m):
             M = eye.copy()
             M[j, j] = factor
             out.append(("mapped", M))
-        out += [("mapped", factor * eye)] if m > 1 and factor > 0 else []
-    for j in range(m):
-        for k in range(j + 1, m):
-            out.append(("mapped", eye[[k if i == j else j if i == k else i for i in range(m)]]))
+        out += [("mapped", factor * eye)] if m > 1 else []
     return out + [(-1, None), (1, None), ("zeros", None)]
+
+
+def _margin(fits, M):
+    """How much better than the fitted map (or, without one, than the recorded controls) a usual mistake must do to
+    be named instead: any better than a map that is itself a change of unit, sign or columns (the same mistake,
+    roughly fitted), 4 times better than a mild one (what another mass or gain also gives) or than none."""
+    return 1.0 if "mapped" in fits and _unit_like("mapped", M) else 4.0
 
 
 def _best_usual(problem, states, controls, u):
@@ -232,11 +245,12 @@ DEGREES = ((np.pi / 180, "recorded in degrees where the model takes radians?"),
            (180 / np.pi, "recorded in radians where the model takes degrees?"))
 
 
-def _describe(M, c, span, names):
+def _describe(M, c, problem):
     """``'torque' about 1000 times the recorded one``, ``'vx' about 1 times the recorded 'vy'`` (the largest
-    entry of each row), ``minus 1.5`` (an offset beyond a tenth of the set's range), for the controls changed;
-    "" when none is."""
-    out = []
+    entry of each row), ``minus 1.5`` (an offset beyond a tenth of the set's range), for the controls changed (a
+    factor of pi/180 or 180/pi on an angle or its rate named as degrees); "" when none is."""
+    names, units = problem.system.control_names, problem.system.control_units
+    span, out = problem.controls.max(axis=0) - problem.controls.min(axis=0), []
     for i, row in enumerate(M):
         j = int(np.argmax(np.abs(row)))
         offset = f" {'plus' if c[i] > 0 else 'minus'} {abs(c[i]):.3g}" if abs(c[i]) > 0.1 * span[i] else ""
@@ -244,6 +258,7 @@ def _describe(M, c, span, names):
             continue
         one = "one" if j == i else repr(names[j])
         sign = " (its sign looks reversed)" if j == i and row[j] < 0 else ""
-        sign += next((f" ({said})" for factor, said in DEGREES if j == i and abs(row[j] / factor - 1) < 0.02), "")
+        angle = j == i and any(a in str(units[i]).lower() for a in ("rad", "deg"))
+        sign += next((f" ({said})" for factor, said in DEGREES if angle and abs(row[j] / factor - 1) < 0.02), "")
         out.append(f"{names[i]!r} about {row[j] + 0.0:.4g} times the recorded {one}{offset}{sign}")
     return ", ".join(out)
