@@ -374,15 +374,16 @@ def test_one_control_of_two_with_its_sign_reversed_or_the_columns_exchanged_are_
     assert "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'" in message, message
 
 
-@pytest.mark.parametrize("change, phrase", [
+@pytest.mark.parametrize("change, phrase, units", [
     (lambda f: f.assign(vx=f["vy"], vy=f["vx"]),
-     "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'"),
-    (lambda f: f.assign(vy=-f["vy"]), "'vy' about -1 times the recorded one"),
-    (lambda f: f.assign(vx=f["vx"] / 100, vy=f["vy"] / 100), "'vx' about 100 times the recorded one")],
+     "'vx' about 1 times the recorded 'vy', 'vy' about 1 times the recorded 'vx'", False),
+    (lambda f: f.assign(vy=-f["vy"]), "'vy' about -1 times the recorded one", False),
+    (lambda f: f.assign(vx=f["vx"] / 100, vy=f["vy"] / 100), "'vx' about 100 times the recorded one", True)],
     ids=["columns exchanged", "one sign reversed", "both controls in another unit (x 1/100)"])
-def test_one_demonstration_too_short_to_fit_is_still_named(change, phrase, tmp_path):
+def test_one_demonstration_too_short_to_fit_is_still_named(change, phrase, units, tmp_path):
     """Six planar demonstrations of 12 steps, one of them with a mistake: 12 steps are too few to fit a 2 x 2 map
-    and offset (24 are needed), so the usual changes are tried as they are, and the one that explains it is named."""
+    and offset (24 are needed), so the usual changes are tried as they are, and the one that explains it is named
+    (asking about other units only beside a factor)."""
     problem = load_system(_system(tmp_path)).problem
     frame = _planar_recording(problem, 6, seed=5)
     odd = frame["demo"] == "d4"
@@ -393,6 +394,7 @@ def test_one_demonstration_too_short_to_fit_is_still_named(change, phrase, tmp_p
         check_recording(problem, read_recording(path, problem.system.state_names, problem.system.control_names))
     said = [str(w.message) for w in record if "follow their recorded controls" in str(w.message)]
     assert len(said) == 1 and "demonstrations 'd4' (1 of 6)" in said[0] and phrase in said[0], said
+    assert ("were they recorded in other units?" in said[0]) == units, said
 
 
 SYSTEM_MISTAKES = [  # (case, spec, [control] values, [simulate] start, phrases of the error)
