@@ -32,10 +32,13 @@ figures: $(READY) git-filter
 	@echo "==> building the reproduction report"
 	$(BIN)/python -m mutual.compendium.report --output figures --readme README.md
 
-## test: unit tests plus a quick run of every notebook (outputs to a temporary folder)
+## test: unit tests plus a quick run of every notebook (outputs to a temporary folder): the unit tests on
+##       WORKERS pytest-xdist workers, a file each at a time, beside the notebook lane (`make test WORKERS=8`
+##       on a larger machine; WORKERS=0: one process, as a plain `pytest` runs)
+WORKERS ?= 2
 test: $(READY) git-filter
 	@echo "==> running the tests (unit tests and every notebook with quick parameters)"
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(WORKERS) --dist loadfile --no-loadscope-reorder
 
 ## bench: timings side by side, printed and written to figures/benchmarks.md;
 ##        `make bench QUICK=1` (or `make bench-quick`): small sizes, written to build/bench/ only

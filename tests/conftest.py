@@ -1,16 +1,11 @@
-"""Shared test set-up: quiet, single-threaded numerics and a private output folder,
-so no test ever writes into the committed ``figures/`` (or the scratch folder)."""
+"""Shared test set-up: quiet, single-threaded numerics and a private output folder per process,
+so no test ever writes into the committed ``figures/`` (or the scratch folder), and the notebook
+lane (``helpers.lane``): the notebooks' quick runs, once per session, beside the unit tests."""
 
 import gc
-import inspect
 import json
 import os
-import re
-import subprocess
-import sys
 import tempfile
-import threading
-import time
 from pathlib import Path
 
 import pytest
@@ -21,76 +16,20 @@ import pytest
 gc.set_threshold(10_000, 50, 1_000)
 os.environ.setdefault("MPLBACKEND", "Agg")
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_var] = "1"  # this process and the notebook lane (below): two single-threaded lanes on two cores
+    os.environ[_var] = "1"  # every test process and the notebook lane (below): single-threaded, one per core
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
 os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
-os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")
+os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")  # each process its own
+WORKER = os.environ.get("PYTEST_XDIST_WORKER")  # a pytest-xdist worker (make test: -n) shares its controller's lane
+if not WORKER:
+    os.environ["MUTUAL_TEST_LANE"] = str(Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "notebooks")
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
-from mutual.compendium.paths import NOTEBOOKS
+from helpers.lane import LaneOutcomes, NotebookLane, needed_notebooks, sort_for_the_lane
 
-import nbformat  # after mutual.compendium, which keeps jsonschema's 1.4 s IRI grammar from loading
+import nbformat  # after mutual (helpers.lane), which keeps jsonschema's 1.4 s IRI grammar from loading
 
-
-LANE_OUTPUT = Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "notebooks"  # the lane's own: a runner holds its folder
-_CALLS = re.compile(r"executed_notebook\(\s*[\"'](\d\d_\w+)[\"']")
-
-
-class NotebookLane:
-    """Quick runs of the notebooks the collected tests need, one after another in a background
-    process (the runner, ``python -m mutual.compendium.notebooks --quick``), while the unit tests
-    run in this one: two lanes on two cores, and every notebook runs once per session. The
-    overview runs last (it renders the other notebooks' results)."""
-
-    def __init__(self, stems):
-        self.stems = [s for s in sorted(stems) if not s.startswith("00_")] + sorted(s for s in stems if s.startswith("00_"))
-        self.done = {stem: threading.Event() for stem in self.stems}
-        self.outcome, self.process, self.stopped = {}, None, False
-        self.seconds, self.waited = {}, 0.0
-        self.thread = threading.Thread(target=self._run, daemon=True, name="notebook lane")
-
-    def _run(self):
-        try:
-            for stem in self.stems:
-                if self.stopped:
-                    break
-                command = [sys.executable, "-m", "mutual.compendium.notebooks", "--quick", "--output", str(LANE_OUTPUT),
-                           str(NOTEBOOKS / f"{stem}.ipynb")]
-                start = time.monotonic()
-                self.process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-                out, err = self.process.communicate()
-                self.seconds[stem] = time.monotonic() - start
-                self.outcome[stem] = (self.process.returncode, (err.strip() or out.strip()).splitlines()[-1:])
-                self.done[stem].set()
-        finally:  # whatever happened, nobody waits forever
-            for event in self.done.values():
-                event.set()
-
-    def wait(self, stem):
-        start = time.monotonic()
-        self.done[stem].wait()
-        self.waited += time.monotonic() - start
-        return self.outcome.get(stem, (1, ["the session stopped before this notebook ran"]))
-
-    def stop(self):
-        self.stopped = True
-        if self.process is not None and self.process.poll() is None:
-            self.process.terminate()
-        for event in self.done.values():
-            event.set()
-
-
-def _needed_notebooks(items):
-    """Stems of the notebooks the collected tests use (a ``stem`` parameter, or a literal call)."""
-    stems = set()
-    for item in items:
-        if "executed_notebook" not in getattr(item, "fixturenames", ()):
-            continue
-        stem = getattr(item, "callspec", None) and item.callspec.params.get("stem")
-        stems |= {stem} if stem else set(_CALLS.findall(inspect.getsource(item.function)))
-    if any(s.startswith("00_") for s in stems):
-        stems |= {p.stem for p in NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")}
-    return stems
+LANE_OUTPUT = Path(os.environ["MUTUAL_TEST_LANE"])  # the lane's own folder: a runner holds its folder
 
 
 def pytest_addoption(parser):
@@ -100,6 +39,8 @@ def pytest_addoption(parser):
 
 def pytest_configure(config):
     if config.getoption("--jax-compiles"):
+        if getattr(config.option, "numprocesses", None) or WORKER:
+            raise pytest.UsageError("--jax-compiles counts the compilations of one process: run it without -n")
         from helpers.compiles import CompileCounter
         counter = CompileCounter()
         counter.start()
@@ -109,35 +50,52 @@ def pytest_configure(config):
 @pytest.hookimpl(trylast=True)  # after -k and -m have deselected what will not run
 def pytest_collection_modifyitems(session, config, items):
     """Tests that read a notebook's run go last, in the order the lane runs the notebooks, and the
-    lane starts now: the unit tests run while the notebooks do."""
-    lane = NotebookLane(_needed_notebooks(items))
-    order = {stem: i for i, stem in enumerate(lane.stems)}
+    lane starts now (alone) or when a worker has collected (pytest-xdist's controller, below)."""
+    stems = needed_notebooks(items)
+    sort_for_the_lane(items, stems)
+    if WORKER:
+        config._notebook_lane = LaneOutcomes(stems, LANE_OUTPUT)
+        LANE_OUTPUT.mkdir(parents=True, exist_ok=True)
+        (LANE_OUTPUT / f"needed-{WORKER}.json").write_text(json.dumps(stems))
+        return
+    config._notebook_lane = NotebookLane(stems, LANE_OUTPUT)
+    if stems and not config.option.collectonly:
+        config._notebook_lane.start()
 
-    def key(item):
-        if "executed_notebook" not in getattr(item, "fixturenames", ()):
-            return -1
-        stem = getattr(item, "callspec", None) and item.callspec.params.get("stem")
-        stems = [stem] if stem else _CALLS.findall(inspect.getsource(item.function))
-        return max((order.get(s, len(order)) for s in stems), default=len(order))
-    items.sort(key=key)
-    config._notebook_lane = lane
-    if lane.stems and not config.option.collectonly:
-        lane.thread.start()
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_node_collection_finished(node, ids):
+    """pytest-xdist's controller: the first worker to finish collecting says which notebooks to run."""
+    if getattr(node.config, "_notebook_lane", None) is None:
+        stems = json.loads((LANE_OUTPUT / f"needed-{node.gateway.id}.json").read_text())
+        node.config._notebook_lane = NotebookLane(stems, LANE_OUTPUT)
+        node.config._lane_waited = 0.0
+        if stems:
+            node.config._notebook_lane.start()
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    """pytest-xdist's controller: add up how long each worker waited for the lane."""
+    node.config._lane_waited = getattr(node.config, "_lane_waited", 0.0) + getattr(node, "workeroutput", {}).get("lane_waited", 0.0)
 
 
 def pytest_terminal_summary(terminalreporter, config):
     """Where the notebook lane's time went: each quick run's wall time, and how long the tests waited for it."""
     lane = getattr(config, "_notebook_lane", None)
-    if lane is not None and lane.seconds:
+    if isinstance(lane, NotebookLane) and lane.seconds:
         runs = ", ".join(f"{stem[:2]} {sec:.0f} s" for stem, sec in lane.seconds.items())
+        waited = getattr(config, "_lane_waited", lane.waited)
         terminalreporter.write_line(f"notebook lane (quick runs, wall): {runs}; total {sum(lane.seconds.values()):.0f} s; "
-                                    f"the tests waited {lane.waited:.0f} s for it")
+                                    f"the tests waited {waited:.0f} s for it")
 
 
 def pytest_sessionfinish(session):
     lane = getattr(session.config, "_notebook_lane", None)
-    if lane is not None:
+    if isinstance(lane, NotebookLane):
         lane.stop()
+    elif lane is not None and hasattr(session.config, "workeroutput"):
+        session.config.workeroutput["lane_waited"] = lane.waited
 
 
 @pytest.fixture(scope="session")
