@@ -18,7 +18,7 @@ from statsmodels.stats.anova import AnovaRM
 from mutual.cli import main
 from mutual.inputs import read_csv as read_text_csv
 
-from helpers.cli import EXAMPLES, MALFORMED, assert_one_line_error, mutual, no_temporaries
+from helpers.cli import EXAMPLES, MALFORMED, assert_one_line_error, mutual, no_temporaries, refuses_in_one_line
 
 
 def _fresh_study(path, rng):
@@ -107,23 +107,8 @@ CASES = [
 
 @pytest.mark.parametrize("files, argv, phrases", CASES, ids=[" ".join(c[1][:2]) + f" #{i}" for i, c in
                                                               enumerate(CASES)])
-def test_bad_input_is_one_line_naming_what_is_wrong(files, argv, phrases, tmp_path, monkeypatch, capsys):
-    monkeypatch.chdir(tmp_path)
-    for name, content in files.items():
-        if isinstance(content, dict):
-            (tmp_path / name).mkdir()
-        elif isinstance(content, bytes):
-            (tmp_path / name).write_bytes(content)
-        else:
-            (tmp_path / name).write_text(content)
-    before = set(tmp_path.iterdir())
-    status = main(argv + ["--no-progress"])
-    err = capsys.readouterr().err.strip()
-    assert status == 2, err
-    assert len(err.splitlines()) == 1 and err.startswith("mutual ") and ": error: " in err, err
-    for phrase in phrases:
-        assert phrase in err, err
-    assert set(tmp_path.iterdir()) == before, "nothing is written on bad input"
+def test_bad_input_is_one_line_naming_what_is_wrong(files, argv, phrases, tmp_path):
+    refuses_in_one_line(argv, files, phrases, tmp_path)
 
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -50,3 +50,19 @@ def assert_one_line_error(run, *phrases):
 
 def no_temporaries(folder):
     return not [p for p in Path(folder).iterdir() if p.name.startswith(".")]
+
+
+def refuses_in_one_line(argv, files, phrases, folder):
+    """``mutual ARGV --no-progress`` in ``folder`` on ``files`` ({name: text, bytes, or {} for a folder}):
+    exit status 2, one line naming every phrase, and nothing written (a bad-input table's check)."""
+    folder = Path(folder)
+    for name, content in files.items():
+        if isinstance(content, dict):
+            (folder / name).mkdir()
+        elif isinstance(content, bytes):
+            (folder / name).write_bytes(content)
+        else:
+            (folder / name).write_text(content)
+    before = set(folder.iterdir())
+    assert_one_line_error(mutual(*argv, "--no-progress", cwd=folder), *phrases)
+    assert set(folder.iterdir()) == before, "nothing is written on bad input"
