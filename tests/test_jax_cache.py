@@ -41,6 +41,17 @@ def test_a_second_process_loads_what_the_first_compiled(tmp_path):
     assert cold_hits == 0 and warm_hits >= 1 and second == first
 
 
+def test_a_cache_folder_changed_after_import_keeps_the_programs_key(tmp_path):
+    """A process that points MUTUAL_CACHE_DIR elsewhere after importing mutual (a notebook, a test) still writes its
+    programs to the first folder, so it signs them with that folder's key: the next process runs them, no warning."""
+    elsewhere = f"import os; os.environ['MUTUAL_CACHE_DIR'] = {str(tmp_path / 'b')!r}\n"
+    moved = PROGRAM.replace("from jax import monitoring", elsewhere + "from jax import monitoring")
+    env = _env(MUTUAL_CACHE_DIR=str(tmp_path / "a"))
+    subprocess.run([sys.executable, "-c", moved], capture_output=True, text=True, env=env, check=True)
+    out = subprocess.run([sys.executable, "-c", PROGRAM], capture_output=True, text=True, env=env, check=True)
+    assert int(out.stdout.split()[1]) >= 1 and "does not verify" not in out.stderr, out.stderr
+
+
 def test_a_cache_folder_of_ones_own_wins(tmp_path):
     own = tmp_path / "own"
     _, _, folder = _run(_env(MUTUAL_CACHE_DIR=str(tmp_path / "ours"), JAX_COMPILATION_CACHE_DIR=str(own)))

@@ -161,15 +161,16 @@ def _untrusted(folder):
 KEY_BYTES = 32
 
 
-def secret_key():
-    """This user's secret key for authenticating cache entries (``<cache folder>/key``; module docstring), made on
-    first use; None (one :class:`CacheWarning`) when the cache folder cannot be used or the key file is not this
-    user's alone."""
-    try:
-        root = cache_dir()
-    except OSError as err:
-        unusable("the cache folder", err)
-        return None
+def secret_key(root=None):
+    """This user's secret key for authenticating cache entries (``<root>/key``, by default in :func:`cache_dir`;
+    module docstring), made on first use; None (one :class:`CacheWarning`) when the cache folder cannot be used or
+    the key file is not this user's alone."""
+    if root is None:
+        try:
+            root = cache_dir()
+        except OSError as err:
+            unusable("the cache folder", err)
+            return None
     if usable_folder(root) is None:
         return None
     path = root / "key"

@@ -71,7 +71,8 @@ def use_persistent_cache(environ=os.environ):
                 jax.config.update("jax_compilation_cache_dir", None)
         return
     try:
-        folder = cache_dir() / FOLDER
+        root = cache_dir()
+        folder = root / FOLDER
     except OSError as err:
         _when_jax_loads("the cache folder", err, "JAX's compilation cache is off")
         return
@@ -83,7 +84,7 @@ def use_persistent_cache(environ=os.environ):
     if reason:
         _when_jax_loads(folder, reason, "JAX's compilation cache is off; " + advice(folder).removeprefix("running without it; "))
         return
-    authenticate_entries(folder)
+    authenticate_entries(folder, root)
     values = {"jax_compilation_cache_dir": str(folder), "jax_persistent_cache_min_compile_time_secs":
               environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", str(MIN_COMPILE_SECONDS))}
     for option, variable in SETTINGS.items():
@@ -139,16 +140,18 @@ MAC_BYTES = 32
 _REPORTED = set()
 
 
-def authenticate_entries(folder):
-    """Make JAX's file cache in ``folder`` keep an HMAC with each entry and drop entries that do not verify
-    (module docstring): now if JAX's cache module is loaded, else when it is."""
+def authenticate_entries(folder, root):
+    """Make JAX's file cache in ``folder`` keep an HMAC with each entry under the key of the cache folder ``root``
+    and drop entries that do not verify (module docstring): now if JAX's cache module is loaded, else when it is.
+    The key stays ``root``'s for the whole process: a ``MUTUAL_CACHE_DIR`` changed later (by a notebook, a test)
+    moves the other caches, not the key of the programs in ``folder``."""
     if TARGET in sys.modules:
-        _wrap(sys.modules[TARGET], folder)
+        _wrap(sys.modules[TARGET], folder, root)
     elif not any(isinstance(f, _OnExecute) and f.name == TARGET for f in sys.meta_path):
-        sys.meta_path.insert(0, _OnExecute(TARGET, after=lambda module: _wrap(module, folder)))
+        sys.meta_path.insert(0, _OnExecute(TARGET, after=lambda module: _wrap(module, folder, root)))
 
 
-def _wrap(module, folder):
+def _wrap(module, folder, root):
     """Wrap ``module.get_file_cache`` (and a cache it made already) for ``folder``; without them, no cache."""
     original = getattr(module, "get_file_cache", None)
     if original is None or getattr(original, "authenticated", False) or not hasattr(module, "_cache"):
@@ -163,12 +166,12 @@ def _wrap(module, folder):
         found = original(path)
         if found is None or os.path.realpath(str(path)) != mine:
             return found
-        return _authenticated(found[0]), found[1]
+        return _authenticated(found[0], root), found[1]
 
     get_file_cache.authenticated = True
     module.get_file_cache = get_file_cache
     if module._cache is not None and os.path.realpath(str(module._cache._path)) == mine:
-        module._cache = _authenticated(module._cache)
+        module._cache = _authenticated(module._cache, root)
 
 
 def write_text_bytes(path, data):
@@ -181,8 +184,8 @@ def _mac(secret, key, value):
     return hmac.new(secret, b"jax\0" + key.encode() + b"\0" + bytes(value), hashlib.sha256).digest()
 
 
-def _authenticated(base):
-    """JAX's cache ``base`` with an HMAC before each entry (a subclass of JAX's cache interface)."""
+def _authenticated(base, root):
+    """JAX's cache ``base`` with an HMAC under ``root``'s key before each entry (a CacheInterface)."""
     from jax._src.compilation_cache_interface import CacheInterface
 
     class AuthenticatedEntries(CacheInterface):
@@ -190,7 +193,7 @@ def _authenticated(base):
             self._inner, self._path = inner, inner._path
 
         def get(self, key):
-            stored, secret = self._inner.get(key), secret_key()
+            stored, secret = self._inner.get(key), secret_key(root)
             if stored is None or secret is None:
                 return None
             mac, value = stored[:MAC_BYTES], stored[MAC_BYTES:]
@@ -209,7 +212,7 @@ def _authenticated(base):
             return None
 
         def put(self, key, value):
-            secret = secret_key()
+            secret = secret_key(root)
             if secret is None:
                 return
             stored = _mac(secret, key, value) + bytes(value)
