@@ -52,6 +52,23 @@ def test_a_cache_folder_changed_after_import_keeps_the_programs_key(tmp_path):
     assert int(out.stdout.split()[1]) >= 1 and "does not verify" not in out.stderr, out.stderr
 
 
+# a process that imported mutual runs sys.argv[1] in a child process, which inherits JAX_COMPILATION_CACHE_DIR
+INHERITS = "import mutual, subprocess, sys; sys.exit(subprocess.run([sys.executable, '-c', sys.argv[1]]).returncode)"
+
+
+def test_a_child_process_signs_and_reads_the_cache_it_inherits(tmp_path):
+    """A notebook's kernel, a Dask worker or a subprocess inherits the JAX cache folder mutual set: it signs what
+    it writes there (a fresh process runs it, no warning) and runs what is signed (no undecodable entry)."""
+    env = _env(MUTUAL_CACHE_DIR=str(tmp_path))
+    python = functools.partial(subprocess.run, capture_output=True, text=True, env=env, check=True)
+    child = python([sys.executable, "-c", INHERITS, PROGRAM])
+    fresh = python([sys.executable, "-c", PROGRAM])
+    assert int(fresh.stdout.split()[1]) >= 1 and "does not verify" not in fresh.stderr, fresh.stderr
+    again = python([sys.executable, "-c", INHERITS, PROGRAM])
+    assert int(again.stdout.split()[1]) >= 1 and "Error reading" not in again.stderr, again.stderr
+    assert child.stdout.split()[2] == fresh.stdout.split()[2] == str(tmp_path / jax_cache.FOLDER)
+
+
 def test_a_cache_folder_of_ones_own_wins(tmp_path):
     own = tmp_path / "own"
     _, _, folder = _run(_env(MUTUAL_CACHE_DIR=str(tmp_path / "ours"), JAX_COMPILATION_CACHE_DIR=str(own)))

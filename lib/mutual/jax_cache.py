@@ -58,9 +58,11 @@ def use_persistent_cache(environ=os.environ):
     """Turn JAX's persistent compilation cache on in ``<cache folder>/jax-signed``, with authenticated entries (see
     the module); refuse a folder, ours or yours, that others may write. Why the cache is off is said when JAX
     is imported (at once if it was already), so a command that never compiles says nothing and the command
-    line shows it in its own one-line form."""
+    line shows it in its own one-line form. A ``JAX_COMPILATION_CACHE_DIR`` named ``jax-signed`` is one that
+    :mod:`mutual` set and a child process inherited (a notebook's kernel, a Dask worker, a subprocess): it is
+    ours, signed with its parent folder's key, so the child signs what it writes there and reads what is signed."""
     own = environ.get("JAX_COMPILATION_CACHE_DIR")
-    if own:
+    if own and Path(own).name != FOLDER:
         reason = insecure(own)
         if reason:
             _when_jax_loads(own, reason, f"JAX's compilation cache is off; make {own} yours alone (chmod -R go-w {own}) "
@@ -71,8 +73,7 @@ def use_persistent_cache(environ=os.environ):
                 jax.config.update("jax_compilation_cache_dir", None)
         return
     try:
-        root = cache_dir()
-        folder = root / FOLDER
+        folder = Path(own or cache_dir() / FOLDER).absolute()  # a child process in another folder finds it too
     except OSError as err:
         _when_jax_loads("the cache folder", err, "JAX's compilation cache is off")
         return
@@ -84,7 +85,7 @@ def use_persistent_cache(environ=os.environ):
     if reason:
         _when_jax_loads(folder, reason, "JAX's compilation cache is off; " + advice(folder).removeprefix("running without it; "))
         return
-    authenticate_entries(folder, root)
+    authenticate_entries(folder, folder.parent)
     values = {"jax_compilation_cache_dir": str(folder), "jax_persistent_cache_min_compile_time_secs":
               environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", str(MIN_COMPILE_SECONDS))}
     for option, variable in SETTINGS.items():
