@@ -16,20 +16,22 @@ import pytest
 gc.set_threshold(10_000, 50, 1_000)
 os.environ.setdefault("MPLBACKEND", "Agg")
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_var] = "1"  # every test process and the notebook lane (below): single-threaded, one per core
+    os.environ[_var] = "1"  # every test process and the notebook lane (below): single-threaded
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
 os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
 os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")  # each process its own
-WORKER = os.environ.get("PYTEST_XDIST_WORKER")  # a pytest-xdist worker (make test: -n) shares its controller's lane
-if not WORKER:
-    os.environ["MUTUAL_TEST_LANE"] = str(Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "notebooks")
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
 from helpers.lane import LaneOutcomes, NotebookLane, needed_notebooks, sort_for_the_lane
 
 import nbformat  # after mutual (helpers.lane), which keeps jsonschema's 1.4 s IRI grammar from loading
 
-LANE_OUTPUT = Path(os.environ["MUTUAL_TEST_LANE"])  # the lane's own folder: a runner holds its folder
+LANE_OUTPUT = Path(os.environ["MUTUAL_OUTPUT_DIR"]) / "notebooks"  # the lane's own folder: a runner holds its folder
+
+
+def lane_folder(config):
+    """Where the session's notebook lane writes: this process's, or a pytest-xdist worker's controller's."""
+    return Path(config.workerinput["lane"]) if hasattr(config, "workerinput") else LANE_OUTPUT
 
 
 def pytest_addoption(parser):
@@ -39,7 +41,7 @@ def pytest_addoption(parser):
 
 def pytest_configure(config):
     if config.getoption("--jax-compiles"):
-        if getattr(config.option, "numprocesses", None) or WORKER:
+        if getattr(config.option, "numprocesses", None) or hasattr(config, "workerinput"):
             raise pytest.UsageError("--jax-compiles counts the compilations of one process: run it without -n")
         from helpers.compiles import CompileCounter
         counter = CompileCounter()
@@ -53,14 +55,21 @@ def pytest_collection_modifyitems(session, config, items):
     lane starts now (alone) or when a worker has collected (pytest-xdist's controller, below)."""
     stems = needed_notebooks(items)
     sort_for_the_lane(items, stems)
-    if WORKER:
-        config._notebook_lane = LaneOutcomes(stems, LANE_OUTPUT)
-        LANE_OUTPUT.mkdir(parents=True, exist_ok=True)
-        (LANE_OUTPUT / f"needed-{WORKER}.json").write_text(json.dumps(stems))
+    if hasattr(config, "workerinput"):
+        folder = lane_folder(config)
+        config._notebook_lane = LaneOutcomes(stems, folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / f"needed-{config.workerinput['workerid']}.json").write_text(json.dumps(stems))
         return
     config._notebook_lane = NotebookLane(stems, LANE_OUTPUT)
     if stems and not config.option.collectonly:
         config._notebook_lane.start()
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node):
+    """pytest-xdist's controller: each worker reads the controller's lane folder."""
+    node.workerinput["lane"] = str(LANE_OUTPUT)
 
 
 @pytest.hookimpl(optionalhook=True)
@@ -104,7 +113,7 @@ def executed_notebook(pytestconfig):
     notebook lane ran it in a fresh kernel with ``quick=True``) and returns its results
     ``{claim_id: entry}``; the executed notebooks are in ``executed_notebook.nodes``, their
     outputs (figures, tables, results) in ``executed_notebook.folder``."""
-    lane = pytestconfig._notebook_lane
+    lane, folder = pytestconfig._notebook_lane, lane_folder(pytestconfig)
     nodes = {}
 
     def run(stem):
@@ -114,9 +123,9 @@ def executed_notebook(pytestconfig):
         if status != 0:
             pytest.fail(f"{stem}: {' '.join(why) or f'the runner exited with status {status}'}")
         if stem not in nodes:
-            nodes[stem] = nbformat.read(str(LANE_OUTPUT / "executed" / f"{stem}.ipynb"), as_version=4)
-        path = LANE_OUTPUT / "results" / f"{stem}.json"
+            nodes[stem] = nbformat.read(str(folder / "executed" / f"{stem}.ipynb"), as_version=4)
+        path = folder / "results" / f"{stem}.json"
         return json.loads(path.read_text())["claims"] if path.exists() else {}
 
-    run.nodes, run.folder = nodes, LANE_OUTPUT
+    run.nodes, run.folder = nodes, folder
     return run

@@ -69,6 +69,23 @@ def test_a_child_process_signs_and_reads_the_cache_it_inherits(tmp_path):
     assert child.stdout.split()[2] == fresh.stdout.split()[2] == str(tmp_path / jax_cache.FOLDER)
 
 
+def test_an_inherited_folder_that_others_may_write_is_not_used(tmp_path):
+    """A child's inherited signed folder passes the same checks as its parent's: world-writable, the cache is off."""
+    (tmp_path / "x" / jax_cache.FOLDER).mkdir(parents=True)
+    (tmp_path / "x").chmod(0o777)
+    env = _env(MUTUAL_CACHE_DIR=str(tmp_path / "x"), JAX_COMPILATION_CACHE_DIR=str(tmp_path / "x" / jax_cache.FOLDER),
+               MUTUAL_JAX_CACHE_ROOT=str(tmp_path / "x"))
+    out = subprocess.run([sys.executable, "-c", PROGRAM], capture_output=True, text=True, env=env, check=True)
+    assert out.stdout.split()[2] == "None" and "can be written by anyone" in out.stderr, out.stderr
+
+
+def test_a_folder_of_ones_own_named_jax_signed_stays_ones_own(tmp_path):
+    """Only the folder mutual chose is signed (its variables say so): no key is made beside a folder of the user's."""
+    own = tmp_path / jax_cache.FOLDER
+    _, _, folder = _run(_env(MUTUAL_CACHE_DIR=str(tmp_path / "ours"), JAX_COMPILATION_CACHE_DIR=str(own)))
+    assert folder == str(own) and not (tmp_path / "key").exists() and not (tmp_path / "ours").exists()
+
+
 def test_a_cache_folder_of_ones_own_wins(tmp_path):
     own = tmp_path / "own"
     _, _, folder = _run(_env(MUTUAL_CACHE_DIR=str(tmp_path / "ours"), JAX_COMPILATION_CACHE_DIR=str(own)))

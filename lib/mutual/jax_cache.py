@@ -40,6 +40,7 @@ from .atomic import atomic_path
 from .cache import CacheWarning, advice, cache_dir, insecure, secret_key, unusable
 
 FOLDER = "jax-signed"       # entries with their HMAC (the unsigned ones of "jax" are never read)
+ROOT_ENV = "MUTUAL_JAX_CACHE_ROOT"  # set beside JAX_COMPILATION_CACHE_DIR: the cache folder whose key signs it
 MIN_COMPILE_SECONDS = 0.0  # every compiled program (JAX's default, 1 s, would leave out most iLQR kernels)
 SETTINGS = {"jax_compilation_cache_dir": "JAX_COMPILATION_CACHE_DIR",
             "jax_persistent_cache_min_compile_time_secs": "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"}
@@ -58,43 +59,63 @@ def use_persistent_cache(environ=os.environ):
     """Turn JAX's persistent compilation cache on in ``<cache folder>/jax-signed``, with authenticated entries (see
     the module); refuse a folder, ours or yours, that others may write. Why the cache is off is said when JAX
     is imported (at once if it was already), so a command that never compiles says nothing and the command
-    line shows it in its own one-line form. A ``JAX_COMPILATION_CACHE_DIR`` named ``jax-signed`` is one that
-    :mod:`mutual` set and a child process inherited (a notebook's kernel, a Dask worker, a subprocess): it is
-    ours, signed with its parent folder's key, so the child signs what it writes there and reads what is signed."""
+    line shows it in its own one-line form. A child process (a notebook's kernel, a Dask worker, a subprocess)
+    inherits both ``JAX_COMPILATION_CACHE_DIR`` and ``MUTUAL_JAX_CACHE_ROOT``, the cache folder whose key signs it:
+    it signs what it writes there and reads what is signed, as its parent does."""
     own = environ.get("JAX_COMPILATION_CACHE_DIR")
-    if own and Path(own).name != FOLDER:
+    root = _inherited(own, environ)
+    if own and root is None:
         reason = insecure(own)
         if reason:
             _when_jax_loads(own, reason, f"JAX's compilation cache is off; make {own} yours alone (chmod -R go-w {own}) "
                                   f"or unset JAX_COMPILATION_CACHE_DIR; clearing it is safe: rm -rf {own}")
-            environ.pop("JAX_COMPILATION_CACHE_DIR")
-            if "jax" in sys.modules:
-                import jax
-                jax.config.update("jax_compilation_cache_dir", None)
+            _off(environ, own)
         return
     try:
-        folder = Path(own or cache_dir() / FOLDER).absolute()  # a child process in another folder finds it too
+        root = root or cache_dir().absolute()  # absolute: a child process in another folder finds it too
     except OSError as err:
         _when_jax_loads("the cache folder", err, "JAX's compilation cache is off")
-        return
+        return _off(environ, own)
+    folder = root / FOLDER
     if not _writable(folder):
         _when_jax_loads(folder, f"{folder} is not writable", "JAX's compilation cache is off (set MUTUAL_CACHE_DIR to a "
                  "writable folder to keep compiled programs between runs)")
-        return
+        return _off(environ, folder)
     reason = insecure(folder)
     if reason:
         _when_jax_loads(folder, reason, "JAX's compilation cache is off; " + advice(folder).removeprefix("running without it; "))
-        return
-    authenticate_entries(folder, folder.parent)
+        return _off(environ, folder)
+    authenticate_entries(folder, root)
     values = {"jax_compilation_cache_dir": str(folder), "jax_persistent_cache_min_compile_time_secs":
               environ.get("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", str(MIN_COMPILE_SECONDS))}
     for option, variable in SETTINGS.items():
         environ[variable] = values[option]
+    environ[ROOT_ENV] = str(root)
     if "jax" in sys.modules:  # imported before mutual: its flags were read already
         import jax
         jax.config.update("jax_compilation_cache_dir", values["jax_compilation_cache_dir"])
         jax.config.update("jax_persistent_cache_min_compile_time_secs",
                           float(values["jax_persistent_cache_min_compile_time_secs"]))
+
+
+def _inherited(own, environ):
+    """The cache folder whose key signs ``own`` when a process that imported mutual set both (an absolute
+    ``MUTUAL_JAX_CACHE_ROOT`` with ``own`` its ``jax-signed``); None for a folder of the user's own."""
+    root = environ.get(ROOT_ENV)
+    if own and root and Path(root).is_absolute() and Path(own) == Path(root) / FOLDER:
+        return Path(root)
+    return None
+
+
+def _off(environ, folder):
+    """No persistent cache in ``folder`` for this process or its children: the variables cleared, and JAX's
+    setting if JAX read it already."""
+    environ.pop("JAX_COMPILATION_CACHE_DIR", None)
+    environ.pop(ROOT_ENV, None)
+    if "jax" in sys.modules and folder is not None:
+        import jax
+        if str(jax.config.jax_compilation_cache_dir) == str(folder):
+            jax.config.update("jax_compilation_cache_dir", None)
 
 
 def _when_jax_loads(where, reason, doing):

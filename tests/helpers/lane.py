@@ -73,8 +73,11 @@ class NotebookLane:
 
     def _finish(self, stem, outcome):
         self.outcome[stem] = outcome
-        _write_json(self.folder / "lane" / f"{stem}.json", list(outcome))
         self.done[stem].set()
+        try:
+            _write_json(self.folder / "lane" / f"{stem}.json", list(outcome))
+        except OSError:
+            pass  # the workers stop waiting at their deadline
 
     def _run(self):
         try:
@@ -115,12 +118,16 @@ class NotebookLane:
 class LaneOutcomes:
     """A pytest-xdist worker's view of the controller's lane: waits for ``folder/lane/<stem>.json``."""
 
-    def __init__(self, stems, folder):
+    def __init__(self, stems, folder, deadline=3600.0):
         self.done, self.folder, self.waited = dict.fromkeys(stems), Path(folder), 0.0
+        self.deadline, self.controller = deadline, os.getppid()
 
     def wait(self, stem, poll=0.2):
+        """The outcome of ``stem``'s run; a failure if the controller is gone or an hour passed without one."""
         path, start = self.folder / "lane" / f"{stem}.json", time.monotonic()
         while not path.exists():
+            if os.getppid() != self.controller or time.monotonic() - start > self.deadline:
+                return 1, ["the notebook lane gave no outcome for this notebook (its controller stopped or hung)"]
             time.sleep(poll)
         self.waited += time.monotonic() - start
         return tuple(json.loads(path.read_text()))
