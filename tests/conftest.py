@@ -78,7 +78,6 @@ def pytest_xdist_node_collection_finished(node, ids):
     if getattr(node.config, "_notebook_lane", None) is None:
         stems = json.loads((LANE_OUTPUT / f"needed-{node.gateway.id}.json").read_text())
         node.config._notebook_lane = NotebookLane(stems, LANE_OUTPUT)
-        node.config._lane_waited = 0.0
         if stems:
             node.config._notebook_lane.start()
 
@@ -86,7 +85,8 @@ def pytest_xdist_node_collection_finished(node, ids):
 @pytest.hookimpl(optionalhook=True)
 def pytest_testnodedown(node, error):
     """pytest-xdist's controller: add up how long each worker waited for the lane."""
-    node.config._lane_waited = getattr(node.config, "_lane_waited", 0.0) + getattr(node, "workeroutput", {}).get("lane_waited", 0.0)
+    waited = getattr(node, "workeroutput", {}).get("lane_waited", 0.0)
+    node.config._lane_waited = getattr(node.config, "_lane_waited", 0.0) + waited
 
 
 def pytest_terminal_summary(terminalreporter, config):

@@ -14,6 +14,7 @@ import threading
 import time
 from pathlib import Path
 
+from mutual.atomic import atomic_path
 from mutual.compendium.paths import NOTEBOOKS
 
 CALLS = re.compile(r"executed_notebook\(\s*[\"'](\d\d_\w+)[\"']")
@@ -53,13 +54,6 @@ def sort_for_the_lane(items, stems):
     items.sort(key=key)
 
 
-def _write_json(path, value):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.{os.getpid()}")
-    partial.write_text(json.dumps(value))
-    os.replace(partial, path)  # a reader sees the whole file or none
-
-
 class NotebookLane:
     """Runs the quick notebooks in a background thread, each in its own process, into ``folder``;
     each outcome also goes to ``folder/lane/<stem>.json`` for the workers of a pytest-xdist run."""
@@ -75,7 +69,8 @@ class NotebookLane:
         self.outcome[stem] = outcome
         self.done[stem].set()
         try:
-            _write_json(self.folder / "lane" / f"{stem}.json", list(outcome))
+            with atomic_path(self.folder / "lane" / f"{stem}.json") as partial:  # a worker reads all or nothing
+                partial.write_text(json.dumps(list(outcome)))
         except OSError:
             pass  # the workers stop waiting at their deadline
 
