@@ -7,6 +7,7 @@ private one can be made."""
 import asyncio
 import json
 import operator
+import os
 import subprocess
 import sys
 import time
@@ -41,6 +42,25 @@ def test_results_come_back_in_task_order_inline_and_on_the_cluster(private):
     assert inline == remote == [k * k + 3 for k in range(7)]
     assert sorted(seen) == list(range(7)) and ran.where == "inline" and ran_remote.workers == 1
     assert ran_remote.where.startswith("tls://127.0.0.1:")
+
+
+def _malloc_setting(task):
+    import os
+    return os.environ.get("MALLOC_TRIM_THRESHOLD_")
+
+
+def test_starting_a_cluster_leaves_this_processs_environment_as_it_was(monkeypatch):
+    """Dask's nanny writes its workers' settings (MALLOC_TRIM_THRESHOLD_, OMP_NUM_THREADS=1, ...) into the
+    environment of the process that starts them, where every later subprocess (a kernel, a command) inherited them;
+    and its MALLOC_TRIM_THRESHOLD_ turns off glibc's dynamic mmap threshold in the workers (every large NumPy
+    temporary mapped afresh: an inference of the continuous benchmark ran 3.5 times slower): they keep ours (none)."""
+    monkeypatch.setenv("OMP_NUM_THREADS", "2")
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    before = dict(os.environ)
+    with parallel.private_cluster(workers=1) as client:
+        theirs, _ = parallel.map_tasks(_malloc_setting, [0], client=client)
+        assert dict(os.environ) == before
+    assert theirs == [None] and dict(os.environ) == before
 
 
 def _intruder_client(address, security):

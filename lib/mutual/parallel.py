@@ -32,6 +32,11 @@ SCHEDULER_ENV = "MUTUAL_DASK_SCHEDULER"
 INLINE = "inline"
 #: no HTTP route on the embedded cluster's scheduler and workers: no dashboard, no status or metrics page
 NO_ROUTES = {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
+#: the workers allocate as this process does: Dask's nanny sets MALLOC_TRIM_THRESHOLD_ in each worker, which turns off
+#: glibc's dynamic mmap threshold, so every large NumPy temporary is mapped and its pages faulted in afresh (a
+#: NumPy-heavy task, such as an inference of the continuous benchmark, ran 3.5 times slower); a value you set stays
+PRE_SPAWN = "distributed.nanny.pre-spawn-environ"
+KEEP_MALLOC = {f"{PRE_SPAWN}.MALLOC_TRIM_THRESHOLD_": None}
 
 
 @dataclass(frozen=True)
@@ -65,6 +70,21 @@ def can_be_private():
 
 
 @contextmanager
+def _environ_kept(names):
+    """This process's environment variables ``names`` as they were: a nanny sets its workers' pre-spawn
+    variables (one thread each) in the process that starts them, where every later subprocess would inherit them."""
+    before = {name: os.environ.get(name) for name in names}
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+@contextmanager
 def private_cluster(workers=None, timeout=30):
     """A ``distributed.Client`` of an embedded cluster that accepts only this process (module docstring),
     closed on exit."""
@@ -78,7 +98,7 @@ def private_cluster(workers=None, timeout=30):
         raise RuntimeError("an embedded Dask cluster needs the 'cryptography' package for its private TLS certificate; "
                            "install it, or run inline or on a scheduler of your own")
     security = Security.temporary()                 # every role, in memory only; passed to the workers by pipe
-    with dask.config.set(NO_ROUTES):                # read by the scheduler and copied into each worker's config
+    with dask.config.set(NO_ROUTES | KEEP_MALLOC), _environ_kept(dask.config.get(PRE_SPAWN)):
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                                protocol="tls://", security=security, dashboard_address=None,
                                scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
