@@ -178,3 +178,17 @@ def test_recorded_ranges_are_the_extremes_of_the_case_files_read_as_plain_csv():
         speeds = [float(r["theta_dot"]) for r in csv.DictReader(f)]
     assert row["theta_dot min"] == min(speeds) and row["theta_dot max"] == max(speeds)
     assert row["theta_dot min"] >= -4.5 and row["truth"] == "theta_dot >= -4.5"      # the truth, ridden from above
+
+
+def test_cases_on_a_two_worker_cluster_give_the_rows_of_one_process_in_case_order():
+    """The cases are independent tasks: on an embedded Dask cluster of two workers, finishing in any order,
+    the frame is the one a single process gives, row for row (the naive method: cheap, but every column)."""
+    from mutual.constraints.continuous.benchmark import run_benchmark
+    seen = []
+    inline = run_benchmark("all", methods=("naive",), systems=["double_integrator"], scheduler="inline")
+    spread = run_benchmark("all", methods=("naive",), systems=["double_integrator"], workers=2,
+                           progress=lambda case, seconds: seen.append(case.id))
+    assert list(spread["case"]) == [c.id for c in cases("all", ["double_integrator"])] == list(inline["case"])
+    assert sorted(seen) == sorted(spread["case"])
+    columns = [c for c in inline.columns if not c.endswith(": seconds")]
+    assert spread[columns].equals(inline[columns])

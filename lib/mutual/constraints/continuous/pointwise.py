@@ -37,11 +37,13 @@ At continuous points (the demonstrations' starts and ends) the values are one ex
 """
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ... import budget
 from .discretization import kuhn_weights
+from .logspace import log0, logsumexp, logsumexp_rows, probabilities, ratio
 
 SEGMENT_POINTS = 3      # interior points at which a move's straight segment is checked against obstacles
 KEEP_BYTES = 2 ** 28   # at most this much of log Z at the successors is kept between the value and its gradient
@@ -70,6 +72,11 @@ class Moves:
     @property
     def n_owners(self):
         return self.reward.size // self.fan
+
+    @cached_property
+    def by_vertex(self):
+        """``target`` and ``log_weight`` vertex by vertex, (k, P) each, contiguous: what the backups read."""
+        return np.ascontiguousarray(self.target.T), np.ascontiguousarray(self.log_weight.T)
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,18 +192,6 @@ def terminal_rewards(model, weights):
     return -(model.terminal_features @ np.asarray(weights)[-model.terminal_features.shape[2]:])
 
 
-def _log(x):
-    with np.errstate(divide="ignore"):
-        return np.log(x)
-
-
-def _logsumexp(v, axis):
-    """log sum exp along ``axis`` (-inf for an empty sum)."""
-    m = np.max(v, axis=axis, keepdims=True)
-    shift = np.where(np.isfinite(m), m, 0.0)
-    return _log(np.exp(v - shift).sum(axis=axis)) + np.squeeze(shift, axis=axis)
-
-
 def _by_owner(moves, values):
     """``values`` (P, ...) reshaped to (owners, fan, ...)."""
     return values.reshape((moves.n_owners, moves.fan) + values.shape[1:])
@@ -211,23 +206,25 @@ def points_allowed(model, regions):
     return ok.reshape(model.points.shape[:2])
 
 
-def successor_mass(moves, cell_ok):
-    """The interpolation weight (P,) on each successor's allowed vertices (barycentric), or None (sample
-    scheme): what :func:`successor_log_values` renormalizes by, the same at every time step."""
+def successor_norm(moves, cell_ok):
+    """-log of the interpolation weight (P,) on each successor's allowed vertices (barycentric; -inf where
+    none is allowed), or None (sample scheme): what :func:`successor_log_values` renormalizes by, the same
+    at every time step."""
     if moves.target.shape[1] == 1:
         return None
-    return (np.exp(moves.log_weight) * cell_ok[moves.target]).sum(axis=1)
+    weight = (np.exp(moves.log_weight) * cell_ok[moves.target]).sum(axis=1)
+    return np.where(weight > 0, -log0(np.maximum(weight, 1e-300)), -np.inf)
 
 
-def successor_log_values(moves, logZ_next, cell_ok, mass=None):
+def successor_log_values(moves, logZ_next, cell_ok, norm=None):
     """log Z_{t+1} at every move's successor (P,): its cell's value (sample scheme), or the interpolation
     over the allowed vertices with their weights renormalized (barycentric); ``cell_ok`` (X,): cells with
-    an allowed point; ``mass``: :func:`successor_mass`, if computed already."""
+    an allowed point; ``norm``: :func:`successor_norm`, if computed already."""
     if moves.target.shape[1] == 1:
         return logZ_next[moves.target[:, 0]]
-    value = _logsumexp(moves.log_weight + logZ_next[moves.target], axis=1)
-    mass = successor_mass(moves, cell_ok) if mass is None else mass
-    return np.where(mass > 0, value - _log(np.maximum(mass, 1e-300)), -np.inf)
+    target, log_weight = moves.by_vertex
+    value = logsumexp_rows([w + logZ_next[v] for v, w in zip(target, log_weight)])
+    return value + (successor_norm(moves, cell_ok) if norm is None else norm)
 
 
 def log_partition(model, regions=(), weights=1.0, successors=None):
@@ -238,26 +235,26 @@ def log_partition(model, regions=(), weights=1.0, successors=None):
     mv = model.moves
     ok = points_allowed(model, regions)
     n_ok, cell_ok = ok.sum(axis=1), ok.any(axis=1)
-    mass = successor_mass(mv, cell_ok)
+    norm = successor_norm(mv, cell_ok)
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
     logZ = np.empty((model.horizon + 1, ok.shape[0]))
     logZ[-1] = _terminal(model, ok, weights)
-    keep = successors is not None and mass is not None and mv.target.shape[0] * model.horizon * 8 <= KEEP_BYTES
+    keep = successors is not None and norm is not None and mv.target.shape[0] * model.horizon * 8 <= KEEP_BYTES
     if successors is not None:  # emptied when not kept, so a list passed again never holds another call's values
         successors[:] = [None] * model.horizon if keep else []
     for t in range(model.horizon - 1, -1, -1):
-        at = successor_log_values(mv, logZ[t + 1], cell_ok, mass)
+        at = successor_log_values(mv, logZ[t + 1], cell_ok, norm)
         if keep:
             successors[t] = at
         q = _by_owner(mv, move_reward + at)
-        logZ[t] = np.where(cell_ok, _logsumexp(q, axis=1) - _log(np.maximum(n_ok, 1)), -np.inf)
+        logZ[t] = np.where(cell_ok, logsumexp(q, axis=1) - log0(np.maximum(n_ok, 1)), -np.inf)
     return logZ
 
 
 def _terminal(model, ok, weights):
     """log Z_T per cell: log of the mean of exp(w/tau) over the cell's allowed points."""
     w = np.where(ok, terminal_rewards(model, weights), -np.inf)
-    return np.where(ok.any(axis=1), _logsumexp(w, axis=1) - _log(np.maximum(ok.sum(axis=1), 1)), -np.inf)
+    return np.where(ok.any(axis=1), logsumexp(w, axis=1) - log0(np.maximum(ok.sum(axis=1), 1)), -np.inf)
 
 
 def _lambda_ratio(moves, cell_ok, cell_ok_plus):
@@ -266,14 +263,7 @@ def _lambda_ratio(moves, cell_ok, cell_ok_plus):
     w = np.exp(moves.log_weight)
     base = (w * cell_ok[moves.target]).sum(axis=1)
     plus = (w[:, :, None] * cell_ok_plus[moves.target]).sum(axis=1)
-    return _ratio(base[:, None], plus)
-
-
-def _ratio(a, b):
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = a / b
-    r[~np.isfinite(r)] = 0.0
-    return r
+    return ratio(base[:, None], plus)
 
 
 def _candidate_terms(model, moves, regions, candidates):
@@ -297,32 +287,24 @@ def satisfaction(model, logZ, regions, candidates, weights, times):
     ok = points_allowed(model, regions)
     pts = model.points.reshape(-1, model.points.shape[2])
     ok_plus = np.stack([ok & ~c.inside(pts).reshape(ok.shape) for c in candidates], axis=2)    # (X, M, K)
-    n_ratio = _ratio(ok.sum(axis=1)[:, None].astype(float), ok_plus.sum(axis=1).astype(float))   # (X, K)
+    n_ratio = ratio(ok.sum(axis=1)[:, None].astype(float), ok_plus.sum(axis=1).astype(float))   # (X, K)
     cell_ok, extra = _candidate_terms(model, mv, regions, candidates)
     w = np.where(ok, terminal_rewards(model, weights), -np.inf)
     with np.errstate(invalid="ignore"):
-        share = np.exp(w - logZ[-1][:, None] - _log(ok.sum(axis=1))[:, None])
+        share = np.exp(w - logZ[-1][:, None] - log0(ok.sum(axis=1))[:, None])
     share[~np.isfinite(share)] = 0.0
     F = np.einsum("xm,xmk->xk", share, ok_plus) * n_ratio
     out = {model.horizon: F} if model.horizon in times else {}
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
-    mass = successor_mass(mv, cell_ok)
+    norm = successor_norm(mv, cell_ok)
     for t in range(model.horizon - 1, -1, -1):
-        at = successor_log_values(mv, logZ[t + 1], cell_ok, mass)
+        at = successor_log_values(mv, logZ[t + 1], cell_ok, norm)
         q = move_reward + at
-        p = _probabilities(_by_owner(mv, q), logZ[t] + _log(ok.sum(axis=1)))
+        p = probabilities(_by_owner(mv, q), logZ[t] + log0(ok.sum(axis=1)))
         F = _weighted_sums(mv, p, extra, logZ[t + 1], at, F) * n_ratio
         if t in times:
             out[t] = F
     return out
-
-
-def _probabilities(q, total):
-    """exp(q - total) (owners, fan) with 0 where undefined: each move's probability within its owner."""
-    with np.errstate(invalid="ignore"):
-        p = np.exp(q - total[:, None])
-    p[~np.isfinite(p)] = 0.0
-    return p
 
 
 def _weighted_sums(mv, p, extra, logZ_next, at, F_next):
@@ -343,7 +325,7 @@ def point_log_values(moves, logZ_next, allowed, cell_ok, weights):
     """log Z_t at continuous points, one exact step ahead of the grid's log Z_{t+1} (``logZ_next`` (X,)):
     log sum_a Phi exp(r dt/tau) Z_{t+1}(f(s, a)) (N,) for the points of ``moves`` (:func:`point_moves`)."""
     q = np.where(allowed, move_rewards(moves, weights), -np.inf) + successor_log_values(moves, logZ_next, cell_ok)
-    return _logsumexp(_by_owner(moves, q), axis=1)
+    return logsumexp(_by_owner(moves, q), axis=1)
 
 
 def point_ratios(model, moves, logZ_next, F_next, regions, candidates, weights):
@@ -352,7 +334,7 @@ def point_ratios(model, moves, logZ_next, F_next, regions, candidates, weights):
     cell_ok, extra = _candidate_terms(model, moves, regions, candidates)
     at = successor_log_values(moves, logZ_next, cell_ok)
     q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
-    p = _probabilities(q, _logsumexp(q, axis=1))
+    p = probabilities(q, logsumexp(q, axis=1))
     return _weighted_sums(moves, p, extra, logZ_next, at, F_next)
 
 
@@ -380,19 +362,19 @@ def expected_features(model, moves, t0, logZ, regions, weights, successors=None)
     total = np.zeros(run + model.terminal_features.shape[2])
     at = successor_log_values(moves, logZ[t0 + 1], cell_ok)
     q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
-    p = _probabilities(q, _logsumexp(q, axis=1))
+    p = probabilities(q, logsumexp(q, axis=1))
     total[:run] += np.einsum("of,ofk->k", p, _by_owner(moves, moves.features))
     D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, X)
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
-    mass = None if successors else successor_mass(mv, cell_ok)
+    norm = None if successors else successor_norm(mv, cell_ok)
     for t in range(t0 + 1, T):
-        at = successors[t] if successors else successor_log_values(mv, logZ[t + 1], cell_ok, mass)
-        w = D[:, None] * _probabilities(_by_owner(mv, move_reward + at), logZ[t] + _log(n_ok))
+        at = successors[t] if successors else successor_log_values(mv, logZ[t + 1], cell_ok, norm)
+        w = D[:, None] * probabilities(_by_owner(mv, move_reward + at), logZ[t] + log0(n_ok))
         total[:run] += np.einsum("of,ofk->k", w, _by_owner(mv, mv.features))
         D = _spread(mv, w.reshape(-1), logZ[t + 1], at, X)
     term = np.where(ok, terminal_rewards(model, weights), -np.inf)
     with np.errstate(invalid="ignore"):
-        share = np.exp(term - logZ[T][:, None] - _log(n_ok)[:, None])
+        share = np.exp(term - logZ[T][:, None] - log0(n_ok)[:, None])
     share[~np.isfinite(share)] = 0.0
     total[run:] += np.einsum("x,xm,xmd->d", D, share, model.terminal_features)
     return total

@@ -11,7 +11,8 @@ Systems x demonstrators x truths, on data the inference did not generate:
 * :mod:`.naive`, :mod:`.kkt`, :mod:`.kkt_search` -- the baselines: the tightest constraint the data
   allow, and the KKT method of Chou, Ozay and Berenson (2019, 2020) as a published peer;
 * :mod:`.methods`, :mod:`.scoring`, :mod:`.suite` -- each method behind one small function, one
-  scorer for all, and :func:`run_benchmark`, the one call that runs a split;
+  scorer for all, and :func:`run_benchmark`, the one call that runs a split (its cases in parallel, on
+  :mod:`mutual.parallel`'s Dask runner);
 * :mod:`.identifiability` -- how far each true obstacle slides without covering a demonstrated state
   (:func:`slack_table`): what where the demonstrators went leaves open; :func:`recorded_ranges`,
   where they went.

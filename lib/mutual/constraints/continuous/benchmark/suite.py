@@ -14,6 +14,7 @@ import time
 import numpy as np
 import pandas as pd
 
+from ....parallel import INLINE, map_tasks
 from . import methods
 from .cases import case_csv, case_recording, cases
 from .scoring import Answer, describe, score
@@ -61,18 +62,24 @@ def case_row(case, methods_=METHODS):
     return row
 
 
-def run_benchmark(split="development", methods=METHODS, systems=None, quick=False, progress=None):
+def _timed_row(case, methods_):
+    start = time.perf_counter()
+    return case_row(case, methods_), time.perf_counter() - start
+
+
+def run_benchmark(split="development", methods=METHODS, systems=None, quick=False, progress=None, scheduler=None,
+                  workers=None):
     """One row per case of ``split`` ("development", "held-out" or "all"; ``systems``: some of them;
     ``quick``: only the cases of QUICK) for each of ``methods``; ``progress(case, seconds)`` is called
-    after each case."""
+    as each case finishes. The cases are independent tasks (:func:`mutual.parallel.map_tasks`): an embedded
+    cluster of ``workers`` processes (default one per core), a ``scheduler`` of your own, or "inline"; the
+    rows are the same, in case order, wherever they ran."""
     chosen = [c for c in cases(split, systems) if not quick or c.id in QUICK]
-    rows = []
-    for case in chosen:
-        start = time.perf_counter()
-        rows.append(case_row(case, methods))
-        if progress is not None:
-            progress(case, time.perf_counter() - start)
-    return pd.DataFrame(rows)
+    done = None if progress is None else (lambda i, result: progress(chosen[i], result[1]))
+    alone = scheduler is None and len(chosen) < 2              # no cluster for one case
+    results, _ = map_tasks(_timed_row, chosen, shared=(tuple(methods),), scheduler=INLINE if alone else scheduler,
+                           workers=workers, on_result=done)
+    return pd.DataFrame([row for row, _ in results])
 
 
 def _number(value, digits=3):
