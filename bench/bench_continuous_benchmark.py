@@ -6,7 +6,8 @@ over its cases beside the naive baseline's and the KKT peer's, and in ``agree`` 
 compare (the issue's target: every bound within 0.05 of the naive bound's error or better, every
 obstacle within 0.1 m, the right kind first, no false positive, no accepted constraint that lowers
 the exact likelihood). The per-case table goes to build/bench/continuous-benchmark.md and .csv.
-The cases run in parallel, one worker process per core (``run_benchmark``'s embedded Dask cluster).
+The cases run in parallel, one worker process per core (``run_benchmark``'s embedded Dask cluster): the
+seconds per system are summed over cases that shared the machine, the suite's wall time is in each row.
 Quick: the two cases of ``suite.QUICK`` (the ones ``make test`` runs). The recordings are cached
 (``$MUTUAL_CACHE_DIR/continuous-benchmark``); a cold cache adds their generation (about a minute).
 """

@@ -44,23 +44,27 @@ def test_results_come_back_in_task_order_inline_and_on_the_cluster(private):
     assert ran_remote.where.startswith("tls://127.0.0.1:")
 
 
-def _malloc_setting(task):
+def _settings(task):
     import os
-    return os.environ.get("MALLOC_TRIM_THRESHOLD_")
+    return os.environ.get("MALLOC_TRIM_THRESHOLD_"), os.environ.get("OMP_NUM_THREADS")
 
 
 def test_starting_a_cluster_leaves_this_processs_environment_as_it_was(monkeypatch):
-    """Dask's nanny writes its workers' settings (MALLOC_TRIM_THRESHOLD_, OMP_NUM_THREADS=1, ...) into the
-    environment of the process that starts them, where every later subprocess (a kernel, a command) inherited them;
-    and its MALLOC_TRIM_THRESHOLD_ turns off glibc's dynamic mmap threshold in the workers (every large NumPy
-    temporary mapped afresh: an inference of the continuous benchmark ran 3.5 times slower): they keep ours (none)."""
+    """Dask's nanny writes its workers' settings (MALLOC_TRIM_THRESHOLD_, OMP_NUM_THREADS=1, PYTHONHASHSEED, ...)
+    into the environment of the process that starts or restarts them, where every later subprocess (a kernel, a
+    command) inherited them; and its MALLOC_TRIM_THRESHOLD_ turns off glibc's dynamic mmap threshold in the workers
+    (every large NumPy temporary mapped afresh: an inference of the continuous benchmark ran 3.5 times slower). The
+    workers keep ours (none) and run one thread each; this process's environment is as it was."""
     monkeypatch.setenv("OMP_NUM_THREADS", "2")
+    monkeypatch.setenv("PYTHONHASHSEED", "0")
     monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
     before = dict(os.environ)
     with parallel.private_cluster(workers=1) as client:
-        theirs, _ = parallel.map_tasks(_malloc_setting, [0], client=client)
+        theirs, _ = parallel.map_tasks(_settings, [0], client=client)
         assert dict(os.environ) == before
-    assert theirs == [None] and dict(os.environ) == before
+        client.restart()
+        again, _ = parallel.map_tasks(_settings, [1], client=client)
+    assert theirs == again == [(None, "1")] and dict(os.environ) == before
 
 
 def _intruder_client(address, security):

@@ -32,11 +32,15 @@ SCHEDULER_ENV = "MUTUAL_DASK_SCHEDULER"
 INLINE = "inline"
 #: no HTTP route on the embedded cluster's scheduler and workers: no dashboard, no status or metrics page
 NO_ROUTES = {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
-#: the workers allocate as this process does: Dask's nanny sets MALLOC_TRIM_THRESHOLD_ in each worker, which turns off
-#: glibc's dynamic mmap threshold, so every large NumPy temporary is mapped and its pages faulted in afresh (a
-#: NumPy-heavy task, such as an inference of the continuous benchmark, ran 3.5 times slower); a value you set stays
+#: the embedded workers allocate as this process does: Dask's nanny sets MALLOC_TRIM_THRESHOLD_ in each worker, which
+#: turns off glibc's dynamic mmap threshold, so every large NumPy temporary is mapped and its pages faulted in afresh (a
+#: NumPy-heavy task, such as an inference of the continuous benchmark, ran 3.5 times slower); an exported value stays
 PRE_SPAWN = "distributed.nanny.pre-spawn-environ"
 KEEP_MALLOC = {f"{PRE_SPAWN}.MALLOC_TRIM_THRESHOLD_": None}
+#: one thread per worker process, whatever this process's own setting (the nanny would pass that on instead)
+ONE_THREAD = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+#: what a nanny writes into the environment of the process that starts its workers, besides its pre-spawn settings
+NANNY_WRITES = ("PYTHONHASHSEED", "__DASK_PARENT_PID")
 
 
 @dataclass(frozen=True)
@@ -70,10 +74,12 @@ def can_be_private():
 
 
 @contextmanager
-def _environ_kept(names):
-    """This process's environment variables ``names`` as they were: a nanny sets its workers' pre-spawn
-    variables (one thread each) in the process that starts them, where every later subprocess would inherit them."""
+def _environ_kept(names, during=None):
+    """This process's environment variables ``names`` as they were afterwards, and ``during`` (a dict) meanwhile: a
+    nanny writes its workers' variables into the process that starts (or restarts) them, where every later
+    subprocess would inherit them. (Another thread's subprocess started meanwhile still may.)"""
     before = {name: os.environ.get(name) for name in names}
+    os.environ.update(during or {})
     try:
         yield
     finally:
@@ -98,16 +104,19 @@ def private_cluster(workers=None, timeout=30):
         raise RuntimeError("an embedded Dask cluster needs the 'cryptography' package for its private TLS certificate; "
                            "install it, or run inline or on a scheduler of your own")
     security = Security.temporary()                 # every role, in memory only; passed to the workers by pipe
-    with dask.config.set(NO_ROUTES | KEEP_MALLOC), _environ_kept(dask.config.get(PRE_SPAWN)):
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               protocol="tls://", security=security, dashboard_address=None,
-                               scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
-                               worker_dashboard_address=None, silence_logs=logging.ERROR)
-    try:
-        with Client(cluster, security=security, timeout=timeout) as client:
-            yield client
-    finally:
-        cluster.close()
+    with dask.config.set(NO_ROUTES | KEEP_MALLOC):
+        written = set(dask.config.get(PRE_SPAWN)) | set(ONE_THREAD) | set(NANNY_WRITES)
+    with _environ_kept(written):                    # a restarted worker's nanny writes them again
+        with dask.config.set(NO_ROUTES | KEEP_MALLOC), _environ_kept(written, dict.fromkeys(ONE_THREAD, "1")):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   protocol="tls://", security=security, dashboard_address=None,
+                                   scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                                   worker_dashboard_address=None, silence_logs=logging.ERROR)
+        try:
+            with Client(cluster, security=security, timeout=timeout) as client:
+                yield client
+        finally:
+            cluster.close()
 
 
 @contextmanager

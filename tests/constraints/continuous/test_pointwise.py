@@ -63,6 +63,24 @@ def recording(states, controls, dt):
                      tuple(states), tuple(np.vstack([c, np.full((1, c.shape[1]), np.nan)]) for c in controls))
 
 
+def test_a_successors_log_Z_is_the_mean_of_Z_over_its_allowed_vertices_with_their_weights_renormalized():
+    """Off the lattice (controls that land between centres), log Z at each move's successor against the formula
+    in plain NumPy: log(sum_v lambda_v Z(v) / sum_v lambda_v) over the allowed vertices, -inf where none is."""
+    p = integrator_1d()
+    p = Problem(p.system, p.grid, [-0.37, 0.0, 0.41], 0.5, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    moves = pw.point_model(p).moves
+    rng = np.random.default_rng(5)
+    cell_ok = rng.random(p.grid.n_cells) > 0.3
+    logZ_next = np.where(cell_ok, rng.normal(scale=5.0, size=p.grid.n_cells), -np.inf)
+    weight = np.exp(moves.log_weight) * cell_ok[moves.target]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        expected = np.log((weight * np.exp(logZ_next[moves.target])).sum(axis=1) / weight.sum(axis=1))
+    expected[weight.sum(axis=1) == 0] = -np.inf
+    got = pw.successor_log_values(moves, logZ_next, cell_ok)
+    assert 0 < np.isneginf(got).sum() < len(got) and np.array_equal(np.isneginf(got), np.isneginf(expected))
+    np.testing.assert_allclose(got[np.isfinite(got)], expected[np.isfinite(expected)], rtol=1e-12)
+
+
 @pytest.mark.parametrize("bound", [None, 0.3, 0.75, 1.1])
 def test_on_a_lattice_system_log_Z_at_the_start_equals_enumeration(bound):
     p = integrator_1d()

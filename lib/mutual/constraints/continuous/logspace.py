@@ -2,8 +2,9 @@
 (-inf for an empty sum), the probabilities and ratios that may be undefined (0 there).
 
 NumPy reduces a short last axis (the d + 1 vertices of a barycentric successor, a point's controls) several
-times slower than it adds whole arrays, and it sums fewer than 8 entries one after another: such an axis is
-summed here array by array in the same order, so the numbers are the same, bit for bit.
+times slower than it adds whole arrays, and (NumPy 2's pairwise summation, an implementation detail that
+tests/constraints/continuous/test_logspace.py pins) it sums fewer than 8 entries one after another: such an axis
+is summed here array by array in the same order, so the numbers are the same, bit for bit.
 """
 
 import numpy as np
@@ -18,7 +19,8 @@ def log0(x):
 
 
 def logsumexp(v, axis):
-    """log sum exp along ``axis`` (-inf for an empty sum); a short last axis array by array (module docstring)."""
+    """log sum exp along ``axis`` (-inf where every entry is -inf); a short last axis array by array (module
+    docstring)."""
     if v.ndim == 2 and axis in (1, -1) and 0 < v.shape[1] < SHORT:
         return logsumexp_rows([v[:, j] for j in range(v.shape[1])])
     m = np.max(v, axis=axis, keepdims=True)
@@ -27,7 +29,7 @@ def logsumexp(v, axis):
 
 
 def logsumexp_rows(rows):
-    """log sum exp of the arrays ``rows`` (k of them, one shape), summed in their order."""
+    """log sum exp of the arrays ``rows`` (k >= 1 of them, one shape), summed in their order."""
     m = rows[0].copy()
     for row in rows[1:]:
         np.maximum(m, row, out=m)

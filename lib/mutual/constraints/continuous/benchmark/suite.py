@@ -72,8 +72,10 @@ def run_benchmark(split="development", methods=METHODS, systems=None, quick=Fals
     """One row per case of ``split`` ("development", "held-out" or "all"; ``systems``: some of them;
     ``quick``: only the cases of QUICK) for each of ``methods``; ``progress(case, seconds)`` is called
     as each case finishes. The cases are independent tasks (:func:`mutual.parallel.map_tasks`): an embedded
-    cluster of ``workers`` processes (default one per core), a ``scheduler`` of your own, or "inline"; the
-    rows are the same, in case order, wherever they ran."""
+    cluster of ``workers`` processes (default one per core; a script that calls it needs an
+    ``if __name__ == "__main__":`` guard, as for any spawned process), a ``scheduler`` of your own, or "inline";
+    the rows are the same, in case order, wherever they ran. The methods' seconds are measured in the worker
+    beside the others: with several workers on a machine, they are not one process's times."""
     chosen = [c for c in cases(split, systems) if not quick or c.id in QUICK]
     done = None if progress is None else (lambda i, result: progress(chosen[i], result[1]))
     alone = scheduler is None and len(chosen) < 2              # no cluster for one case
