@@ -70,15 +70,15 @@ def _timed_row(case, methods_):
 def run_benchmark(split="development", methods=METHODS, systems=None, quick=False, progress=None, scheduler=None,
                   workers=None):
     """One row per case of ``split`` ("development", "held-out" or "all"; ``systems``: some of them;
-    ``quick``: only the cases of QUICK) for each of ``methods``; ``progress(case, seconds)`` is called
-    as each case finishes. The cases are independent tasks (:func:`mutual.parallel.map_tasks`): an embedded
+    ``quick``: only the cases of QUICK, in this process) for each of ``methods``; ``progress(case, seconds)``
+    is called as each case finishes. The cases are independent tasks (:func:`mutual.parallel.map_tasks`): an embedded
     cluster of ``workers`` processes (default one per core; a script that calls it needs an
     ``if __name__ == "__main__":`` guard, as for any spawned process), a ``scheduler`` of your own, or "inline";
     the rows are the same, in case order, wherever they ran. The methods' seconds are measured in the worker
     beside the others: with several workers on a machine, they are not one process's times."""
     chosen = [c for c in cases(split, systems) if not quick or c.id in QUICK]
     done = None if progress is None else (lambda i, result: progress(chosen[i], result[1]))
-    alone = scheduler is None and len(chosen) < 2              # no cluster for one case
+    alone = scheduler is None and (quick or len(chosen) < 2)   # no cluster: starting one costs more than it saves
     results, _ = map_tasks(_timed_row, chosen, shared=(tuple(methods),), scheduler=INLINE if alone else scheduler,
                            workers=workers, on_result=done)
     return pd.DataFrame([row for row, _ in results])
