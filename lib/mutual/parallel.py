@@ -104,19 +104,17 @@ def private_cluster(workers=None, timeout=30):
         raise RuntimeError("an embedded Dask cluster needs the 'cryptography' package for its private TLS certificate; "
                            "install it, or run inline or on a scheduler of your own")
     security = Security.temporary()                 # every role, in memory only; passed to the workers by pipe
-    with dask.config.set(NO_ROUTES | KEEP_MALLOC):
-        written = set(dask.config.get(PRE_SPAWN)) | set(ONE_THREAD) | set(NANNY_WRITES)
-    with _environ_kept(written):                    # a restarted worker's nanny writes them again
-        with dask.config.set(NO_ROUTES | KEEP_MALLOC), _environ_kept(written, dict.fromkeys(ONE_THREAD, "1")):
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                   protocol="tls://", security=security, dashboard_address=None,
-                                   scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
-                                   worker_dashboard_address=None, silence_logs=logging.ERROR)
-        try:
-            with Client(cluster, security=security, timeout=timeout) as client:
-                yield client
-        finally:
-            cluster.close()
+    written = {*dask.config.get(PRE_SPAWN), *ONE_THREAD, *NANNY_WRITES}
+    with dask.config.set(NO_ROUTES | KEEP_MALLOC), _environ_kept(written, dict.fromkeys(ONE_THREAD, "1")):
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               protocol="tls://", security=security, dashboard_address=None,
+                               scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                               worker_dashboard_address=None, silence_logs=logging.ERROR)
+    try:
+        with _environ_kept(written), Client(cluster, security=security, timeout=timeout) as client:
+            yield client                            # (a restarted worker's nanny writes them again)
+    finally:
+        cluster.close()
 
 
 @contextmanager
