@@ -5,6 +5,7 @@ BIN    := $(VENV)/bin
 READY  := $(VENV)/.ready
 PEERS       := .venv-peers
 PEERS_READY := $(PEERS)/.ready
+UV          := $(BIN)/uv pip install --python $(BIN)/python
 
 NOTEBOOKS := $(wildcard notebooks/[0-9][0-9]_*.ipynb)
 
@@ -95,13 +96,15 @@ git-filter: $(READY)
 		echo "==> installed the git filter that strips notebook outputs on commit (.gitattributes)"; \
 	fi
 
-# The environment is rebuilt whenever the lock or the package metadata changes.
-$(READY): environment.lock pyproject.toml
+# The environment is rebuilt whenever the lock or the package metadata changes. pip installs the pinned
+# uv (installer.lock), and uv the pinned environment: the same hash-checked wheels, in about a quarter of pip's time
+# (parallel downloads; the bytecode compiled on every core)
+$(READY): environment.lock installer.lock pyproject.toml
 	@echo "==> installing the pinned environment into $(VENV) (hash-checked, from environment.lock)"
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --disable-pip-version-check --progress-bar on \
-		--require-hashes --no-deps -r environment.lock
-	$(BIN)/python -m pip install --disable-pip-version-check --no-deps --no-build-isolation -e .
+	$(BIN)/python -m pip install --disable-pip-version-check --quiet --require-hashes --no-deps -r installer.lock
+	$(UV) --require-hashes --no-deps --compile-bytecode -r environment.lock
+	$(UV) --no-deps --no-build-isolation -e .
 	$(BIN)/python -m ipykernel install --sys-prefix --name mutual --display-name "Python (mutual)"
 	@touch $@
 
@@ -114,21 +117,23 @@ $(PEERS_READY): bench/peers/requirements.lock pyproject.toml
 	$(PEERS)/bin/python -m pip install --disable-pip-version-check --no-deps --no-build-isolation -e .
 	@touch $@
 
-## lock: recompile environment.lock from requirements.in (pins and hashes, Python 3.11);
-##       keeps current pins where they still fit; `make lock LOCKFLAGS=--upgrade` upgrades all
+LOCK := build/lock-tools/bin/pip-compile --generate-hashes --allow-unsafe --strip-extras --no-emit-index-url \
+	--no-emit-find-links $(LOCKFLAGS)
+
+## lock: recompile environment.lock from requirements.in, and installer.lock (uv) from installer.in (pins and
+##       hashes, Python 3.11); keeps current pins where they still fit; `make lock LOCKFLAGS=--upgrade` upgrades all
 lock:
 	@test -x build/lock-tools/bin/pip-compile || \
 		($(PYTHON) -m venv build/lock-tools && build/lock-tools/bin/pip install -q pip-tools)
-	build/lock-tools/bin/pip-compile --generate-hashes --allow-unsafe --strip-extras \
-		--no-emit-index-url $(LOCKFLAGS) -o environment.lock requirements.in
+	$(LOCK) -o environment.lock requirements.in
+	$(LOCK) -o installer.lock installer.in
 
 ## lock-peers: recompile bench/peers/requirements.lock from bench/peers/requirements.in (constrained
 ##             to environment.lock's pins, so shared packages match the runtime's versions)
 lock-peers:
 	@test -x build/lock-tools/bin/pip-compile || \
 		($(PYTHON) -m venv build/lock-tools && build/lock-tools/bin/pip install -q pip-tools)
-	build/lock-tools/bin/pip-compile --generate-hashes --allow-unsafe --strip-extras \
-		--no-emit-index-url $(LOCKFLAGS) -o bench/peers/requirements.lock bench/peers/requirements.in
+	$(LOCK) -o bench/peers/requirements.lock bench/peers/requirements.in
 
 ## clean: remove executed notebooks, caches and build products (keeps the environment)
 clean:

@@ -11,27 +11,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers.locks import canonical, pins
 
 ROOT = Path(__file__).resolve().parents[2]
 BINDER = ROOT / "binder"
-
-
-def canonical(name):
-    return re.sub(r"[-_.]+", "-", name).lower()
-
-
-def lock_requirements():
-    """``{name: version}`` of environment.lock, each pinned with ``==`` and at least one hash."""
-    text = (ROOT / "environment.lock").read_text().replace("\\\n", " ")
-    pins = {}
-    for line in text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if not line or line.startswith("--find-links"):  # pip only warns where that folder is missing
-            continue
-        match = re.match(r"^([A-Za-z0-9_.\-]+)==([^\s;]+)(?:\s*;[^-]*)?\s+(--hash=sha256:[0-9a-f]{64}\s*)+$", line)
-        assert match, f"environment.lock: not a pinned, hashed requirement: {line[:80]}"
-        pins[match.group(1).lower()] = match.group(2)
-    return pins
 
 
 def test_runtime_is_the_python_of_the_lock():
@@ -48,9 +31,9 @@ def test_requirements_install_exactly_the_lock():
              if l.strip() and not l.strip().startswith("#")]
     assert lines == ["-r ../environment.lock"], lines
     assert (BINDER / "../environment.lock").resolve() == (ROOT / "environment.lock").resolve()
-    pins = lock_requirements()
+    pinned = pins(ROOT / "environment.lock")
     for needed in ("jupyterlab", "ipykernel", "ipywidgets", "papermill"):
-        assert needed in pins, f"the lock has no {needed}, which the Binder session needs"
+        assert needed in pinned, f"the lock has no {needed}, which the Binder session needs"
 
 
 def test_post_build_installs_mutual_and_registers_its_kernel():
@@ -99,9 +82,9 @@ def test_binder_steps_in_a_clean_venv(tmp_path):
     assert "mutual" in specs and Path(specs["mutual"]["resource_dir"]).is_relative_to(venv)
     argv0 = json.loads((Path(specs["mutual"]["resource_dir"]) / "kernel.json").read_text())["argv"][0]
     assert Path(argv0).parent.resolve() == (venv / "bin").resolve() or argv0 == "python", argv0
-    pins = lock_requirements()
+    pinned = pins(ROOT / "environment.lock")
     frozen = subprocess.run([str(python), "-m", "pip", "freeze", "--all"], env=env, capture_output=True, text=True,
                             check=True).stdout
     installed = {canonical(k): v for k, v in (l.split("==", 1) for l in frozen.splitlines() if "==" in l)}
-    wrong = {n: (v, installed.get(canonical(n))) for n, v in pins.items() if installed.get(canonical(n)) != v}
+    wrong = {n: (v, installed.get(canonical(n))) for n, v in pinned.items() if installed.get(canonical(n)) != v}
     assert not wrong, f"the Binder venv differs from the lock: {dict(list(wrong.items())[:5])}"

@@ -2,26 +2,11 @@
 of the runtime lock, with every package it shares with the runtime at the runtime's version (so both
 sides of a timing run on the same numpy, scipy and jax)."""
 
-import re
-
+from helpers.locks import pins
 from mutual.compendium.paths import ROOT
 
 PEERS = ROOT / "bench" / "peers"
 PEER_PACKAGES = ("crocoddyl", "casadi", "pingouin")
-
-
-def pins(path):
-    """``{name: version}`` of a pip-compile lock; every requirement pinned with ``==`` and hashed."""
-    text = path.read_text().replace("\\\n", " ")
-    found = {}
-    for line in text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if not line or line.startswith("--find-links"):
-            continue
-        match = re.match(r"^([A-Za-z0-9_.\-]+)==([^\s;]+)(?:\s*;[^-]*)?\s+(--hash=sha256:[0-9a-f]{64}\s*)+$", line)
-        assert match, f"{path.name}: not a pinned, hashed requirement: {line[:80]}"
-        found[re.sub(r"[-_.]+", "-", match.group(1)).lower()] = match.group(2)
-    return found
 
 
 def test_the_peers_are_pinned_in_their_own_lock_and_never_in_the_runtime_lock():
