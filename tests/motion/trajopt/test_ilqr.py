@@ -24,23 +24,27 @@ def _random_lq(seed=0, n=4, m=2, N=30):
     return A, B, Q, R, QN, q, qN, x0, N
 
 
-def _lq_callables(A, B, Q, R, QN, q, qN):
-    def dynamics(x, u, params):
-        return jnp.asarray(A) @ x + jnp.asarray(B) @ u
+def _lq_dynamics(x, u, p):
+    return p["A"] @ x + p["B"] @ u
 
-    def running(x, u, params):
-        return 0.5 * x @ Q @ x + q @ x + 0.5 * u @ R @ u
 
-    def terminal(x, params):
-        return 0.5 * x @ QN @ x + qN @ x
+def _lq_running(x, u, p):
+    return 0.5 * x @ p["Q"] @ x + p["q"] @ x + 0.5 * u @ p["R"] @ u
 
-    return dynamics, running, terminal
+
+def _lq_terminal(x, p):
+    return 0.5 * x @ p["QN"] @ x + p["qN"] @ x
+
+
+def _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N):
+    """iLQR on the LQ problem, its matrices passed as traced params: problems of one shape share one program."""
+    params = dict(A=A, B=B, Q=Q, R=R, QN=QN, q=q, qN=qN)
+    return ilqr(_lq_dynamics, _lq_running, _lq_terminal, x0, np.zeros((N, B.shape[1])), params)
 
 
 def test_lq_problem_converges_in_one_step_to_the_riccati_solution():
     A, B, Q, R, QN, q, qN, x0, N = _random_lq()
-    dyn, run, term = _lq_callables(A, B, Q, R, QN, q, qN)
-    result = ilqr(dyn, run, term, x0, np.zeros((N, B.shape[1])))
+    result = _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N)
     exact = solve_lq(A, B, Q, R, x0, N, q=q, QN=QN, qN=qN)
     assert result.iterations <= 2
     np.testing.assert_allclose(result.us, exact.us, atol=1e-9)
@@ -52,7 +56,7 @@ def test_lq_problem_converges_in_one_step_to_the_riccati_solution():
 @pytest.mark.parametrize("m", [3, 6])  # Q_uu factorised by unrolled arithmetic (m <= 4) and by LAPACK
 def test_lq_problems_with_more_controls_match_the_riccati_solution(m):
     A, B, Q, R, QN, q, qN, x0, N = _random_lq(seed=4, n=7, m=m, N=15)
-    result = ilqr(*_lq_callables(A, B, Q, R, QN, q, qN), x0, np.zeros((N, m)))
+    result = _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N)
     exact = solve_lq(A, B, Q, R, x0, N, q=q, QN=QN, qN=qN)
     np.testing.assert_allclose(result.us, exact.us, atol=1e-9)
     np.testing.assert_allclose(result.K, exact.K, atol=1e-8)
@@ -60,10 +64,10 @@ def test_lq_problems_with_more_controls_match_the_riccati_solution(m):
 
 def test_indefinite_but_bounded_lq_problem_is_solved_exactly():
     """A negative state weight (as in (1 + alpha) J1 - J0) that the control cost still dominates."""
-    A, B, Q, R, QN, q, qN, x0, N = _random_lq(seed=1, N=10)
+    A, B, Q, R, QN, q, qN, x0, N = _random_lq(seed=1, N=10)  # bounded up to N = 15 (Riccati; unbounded from 20)
     Q = -0.02 * np.eye(4)
     exact = solve_lq(A, B, Q, R, x0, N, q=q, QN=QN, qN=qN)
-    result = ilqr(*_lq_callables(A, B, Q, R, QN, q, qN), x0, np.zeros((N, 2)))
+    result = _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N)
     np.testing.assert_allclose(result.us, exact.us, atol=1e-9)
 
 
@@ -73,7 +77,7 @@ def test_unbounded_lq_problem_is_reported_as_the_riccati_solver_does():
     with pytest.raises(ValueError, match="unbounded"):
         solve_lq(A, B, Q, R, x0, N, q=q, QN=QN, qN=qN)
     with pytest.raises(ILQRError, match="unbounded"):
-        ilqr(*_lq_callables(A, B, Q, R, QN, q, qN), x0, np.zeros((N, 2)))
+        _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N)
 
 
 def test_objective_unbounded_in_the_controls_is_reported():
@@ -277,7 +281,7 @@ def test_multistart_reports_disagreeing_runs():
 
 
 def test_result_repr_is_short():
-    task, w0, w1 = es.figure_scenario("7.1", steps=10)
+    task, w0, w1 = es.figure_scenario("7.1", steps=30)  # the scaled objectives' problem: compiled once
     text = repr(es.solve(task, w0))
     assert text.startswith("ILQRResult(cost=") and len(text) < 150 and "array" not in text
 
