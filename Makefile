@@ -5,7 +5,16 @@ BIN    := $(VENV)/bin
 READY  := $(VENV)/.ready
 PEERS       := .venv-peers
 PEERS_READY := $(PEERS)/.ready
-UV          := $(BIN)/uv pip install --python $(BIN)/python
+# What installs environment.lock: uv (pinned in installer.lock), or pip (`make env INSTALLER=pip`: pip reads the
+# machine's pip settings, a mirror or a wheel folder, which uv does not: it has its own, UV_INDEX_URL, ...)
+INSTALLER ?= uv
+ifeq ($(INSTALLER),uv)
+INSTALL := $(BIN)/uv pip install --python $(BIN)/python --compile-bytecode
+else ifeq ($(INSTALLER),pip)
+INSTALL := $(BIN)/python -m pip install --disable-pip-version-check
+else
+$(error INSTALLER must be uv or pip, not $(INSTALLER))
+endif
 
 NOTEBOOKS := $(wildcard notebooks/[0-9][0-9]_*.ipynb)
 
@@ -96,15 +105,16 @@ git-filter: $(READY)
 		echo "==> installed the git filter that strips notebook outputs on commit (.gitattributes)"; \
 	fi
 
-# The environment is rebuilt whenever the lock or the package metadata changes. pip installs the pinned
-# uv (installer.lock), and uv the pinned environment: the same hash-checked wheels, in about a quarter of pip's time
+# The environment is rebuilt whenever a lock or the package metadata changes. pip installs the pinned uv
+# (installer.lock), and uv the pinned environment: the same hash-checked wheels, in about a third of pip's time here
 # (parallel downloads; the bytecode compiled on every core)
 $(READY): environment.lock installer.lock pyproject.toml
-	@echo "==> installing the pinned environment into $(VENV) (hash-checked, from environment.lock)"
+	@echo "==> installing the pinned environment into $(VENV) with $(INSTALLER) (hash-checked, from environment.lock)"
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --disable-pip-version-check --quiet --require-hashes --no-deps -r installer.lock
-	$(UV) --require-hashes --no-deps --compile-bytecode -r environment.lock
-	$(UV) --no-deps --no-build-isolation -e .
+	$(if $(filter uv,$(INSTALLER)),$(BIN)/python -m pip install --disable-pip-version-check --quiet \
+		--require-hashes --no-deps -r installer.lock)
+	$(INSTALL) --require-hashes --no-deps -r environment.lock
+	$(INSTALL) --no-deps --no-build-isolation -e .
 	$(BIN)/python -m ipykernel install --sys-prefix --name mutual --display-name "Python (mutual)"
 	@touch $@
 
@@ -121,7 +131,8 @@ LOCK := build/lock-tools/bin/pip-compile --generate-hashes --allow-unsafe --stri
 	--no-emit-find-links $(LOCKFLAGS)
 
 ## lock: recompile environment.lock from requirements.in, and installer.lock (uv) from installer.in (pins and
-##       hashes, Python 3.11); keeps current pins where they still fit; `make lock LOCKFLAGS=--upgrade` upgrades all
+##       hashes, Python 3.11); keeps current pins where they still fit; `make lock LOCKFLAGS=--upgrade` upgrades
+##       all but uv, which installer.in pins (edit it there)
 lock:
 	@test -x build/lock-tools/bin/pip-compile || \
 		($(PYTHON) -m venv build/lock-tools && build/lock-tools/bin/pip install -q pip-tools)

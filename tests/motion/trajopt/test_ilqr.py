@@ -64,7 +64,7 @@ def test_lq_problems_with_more_controls_match_the_riccati_solution(m):
 
 def test_indefinite_but_bounded_lq_problem_is_solved_exactly():
     """A negative state weight (as in (1 + alpha) J1 - J0) that the control cost still dominates."""
-    A, B, Q, R, QN, q, qN, x0, N = _random_lq(seed=1, N=10)  # bounded up to N = 15 (Riccati; unbounded from 20)
+    A, B, Q, R, QN, q, qN, x0, N = _random_lq(seed=1, N=10)  # bounded up to N = 15 (Riccati; unbounded from 16)
     Q = -0.02 * np.eye(4)
     exact = solve_lq(A, B, Q, R, x0, N, q=q, QN=QN, qN=qN)
     result = _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N)
