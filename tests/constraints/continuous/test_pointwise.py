@@ -81,6 +81,25 @@ def test_a_successors_log_Z_is_the_mean_of_Z_over_its_allowed_vertices_with_thei
     np.testing.assert_allclose(got[np.isfinite(got)], expected[np.isfinite(expected)], rtol=1e-12)
 
 
+def test_spreading_mass_reads_only_the_moves_that_carry_some_and_gives_the_same_bits():
+    """The occupancy after one step (a successor's mass split over its vertices as lambda Z(vertex) / sum lambda Z)
+    equals, bit for bit, the same bincount over every move (the moves without mass add exact zeros)."""
+    p = integrator_1d()
+    p = Problem(p.system, p.grid, [-0.37, 0.0, 0.41], 0.5, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    moves = pw.point_model(p).moves
+    rng = np.random.default_rng(7)
+    cell_ok = rng.random(p.grid.n_cells) > 0.3
+    logZ_next = np.where(cell_ok, rng.normal(scale=5.0, size=p.grid.n_cells), -np.inf)
+    at = pw.successor_log_values(moves, logZ_next, cell_ok)
+    mass = np.where(rng.random(moves.n_moves) < 0.3, rng.random(moves.n_moves), 0.0)
+    with np.errstate(invalid="ignore"):
+        share = np.exp(moves.log_weight + logZ_next[moves.target] - at[:, None])
+    share[~np.isfinite(share)] = 0.0
+    every_move = np.bincount(moves.target.ravel(), weights=(mass[:, None] * share).ravel(), minlength=p.grid.n_cells)
+    got = pw._spread(moves, mass, logZ_next, at, p.grid.n_cells)
+    assert 0 < np.count_nonzero(mass) < moves.n_moves and np.array_equal(got, every_move) and got.sum() > 0
+
+
 @pytest.mark.parametrize("bound", [None, 0.3, 0.75, 1.1])
 def test_on_a_lattice_system_log_Z_at_the_start_equals_enumeration(bound):
     p = integrator_1d()
@@ -141,6 +160,35 @@ def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_s
     numeric = [(ev.log_likelihood(model, data, regions, w + h * e)[0] - ev.log_likelihood(model, data, regions, w - h * e)[0]) / (2 * h)
                for e in np.eye(w.size)]
     np.testing.assert_allclose(grad, numeric, rtol=1e-6, atol=1e-8)
+
+@pytest.mark.xfail(strict=True, reason="KNOWN BUG (found at stop 38, not fixed): from the ends of prefixes, the "
+                   "expected features differ from d log Z / d weights when controls land between cell centres and a "
+                   "bound cuts the moves (analytic -1.3902 against -1.3953 for the first weight); whole "
+                   "demonstrations and the starts agree")
+def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_the_lattice_under_a_bound():
+    """Prefixes of 2 steps (their ends enter the gradient), controls that land between centres, a bound at 0.7:
+    the expected features from the ends (:func:`.pointwise.expected_features`) against central differences of
+    their log Z (:func:`.pointwise.point_log_values`)."""
+    p = integrator_1d()
+    p = Problem(p.system, p.grid, [-0.37, 0.0, 0.41], 0.5, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    states, controls, returns = enumerate_paths(p, [0.0], p.horizon)
+    prob = np.where((states[:, :, 0] <= 0.7).all(axis=1), np.exp(returns - returns.max()), 0.0)
+    picks = np.random.default_rng(2).choice(len(returns), size=4, p=prob / prob.sum())
+    data = ev.demonstrated(p, recording(states[picks][:, :3], controls[picks][:, :2], p.dt))
+    model, regions = pw.point_model(p), [Bound(0, "upper", 0.7)]
+    w = pw.file_weights(p) * np.array([1.0, 0.7, 1.3])
+    cell_ok = pw.points_allowed(model, regions).any(axis=1)
+
+    def log_z_at_the_ends(weights):
+        logZ = pw.log_partition(model, regions, weights)
+        return pw.point_log_values(data.ends, logZ[data.steps + 1], pw.allowed_moves(regions, data.ends), cell_ok,
+                                   weights).sum()
+
+    expected = pw.expected_features(model, data.ends, data.steps, pw.log_partition(model, regions, w), regions, w)
+    h = 1e-6
+    numeric = [(log_z_at_the_ends(w + h * e) - log_z_at_the_ends(w - h * e)) / (2 * h) for e in np.eye(w.size)]
+    np.testing.assert_allclose(-expected, numeric, rtol=1e-6, atol=1e-8)
+
 
 def test_among_consistent_bounds_the_tightest_is_the_most_likely_by_enumeration():
     """Lemma 3.2.1's argument for a family of bounds: the enumerated gain falls as the bound loosens."""

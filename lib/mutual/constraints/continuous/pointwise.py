@@ -341,13 +341,17 @@ def point_ratios(model, moves, logZ_next, F_next, regions, candidates, weights):
 
 def _spread(moves, mass, logZ_next, at, n_cells):
     """The cells' occupancy (X,) after the moves carry ``mass`` (P,) to their successors, a successor split
-    over its vertices as its value is (lambda Z(vertex) / sum lambda Z)."""
+    over its vertices as its value is (lambda Z(vertex) / sum lambda Z). Only the moves with mass are read:
+    the others add exact zeros, so the sums are the same to the last bit (most cells hold no mass in the first
+    steps from the demonstrated starts)."""
     if moves.target.shape[1] == 1:
         return np.bincount(moves.target[:, 0], weights=np.where(np.isfinite(at), mass, 0.0), minlength=n_cells)
+    moving = np.flatnonzero(mass)
+    target = moves.target[moving]
     with np.errstate(invalid="ignore"):
-        share = np.exp(moves.log_weight + logZ_next[moves.target] - at[:, None])
+        share = np.exp(moves.log_weight[moving] + logZ_next[target] - at[moving, None])
     share[~np.isfinite(share)] = 0.0
-    return np.bincount(moves.target.ravel(), weights=(mass[:, None] * share).ravel(), minlength=n_cells)
+    return np.bincount(target.ravel(), weights=(mass[moving, None] * share).ravel(), minlength=n_cells)
 
 
 def expected_features(model, moves, t0, logZ, regions, weights, successors=None):
