@@ -29,6 +29,18 @@ def integrator_1d(cells=13, horizon=4, temperature=0.7):
     return Problem(system, grid, [-0.5, 0.0, 0.5], 0.5, horizon, reward, scheme="barycentric", substeps=1)
 
 
+def off_the_lattice():
+    """:func:`integrator_1d` with controls that land between cell centres."""
+    p = integrator_1d()
+    return Problem(p.system, p.grid, [-0.37, 0.0, 0.41], 0.5, p.horizon, p.reward, scheme="barycentric", substeps=1)
+
+
+def random_log_Z(p, rng):
+    """Allowed cells (about 70 %) and a log Z on them, -inf on the others."""
+    cell_ok = rng.random(p.grid.n_cells) > 0.3
+    return cell_ok, np.where(cell_ok, rng.normal(scale=5.0, size=p.grid.n_cells), -np.inf)
+
+
 def line(x, u):
     return np.asarray(u, dtype=float).copy()
 
@@ -66,12 +78,10 @@ def recording(states, controls, dt):
 def test_a_successors_log_Z_is_the_mean_of_Z_over_its_allowed_vertices_with_their_weights_renormalized():
     """Off the lattice (controls that land between centres), log Z at each move's successor against the formula
     in plain NumPy: log(sum_v lambda_v Z(v) / sum_v lambda_v) over the allowed vertices, -inf where none is."""
-    p = integrator_1d()
-    p = Problem(p.system, p.grid, [-0.37, 0.0, 0.41], 0.5, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    p = off_the_lattice()
     moves = pw.point_model(p).moves
     rng = np.random.default_rng(5)
-    cell_ok = rng.random(p.grid.n_cells) > 0.3
-    logZ_next = np.where(cell_ok, rng.normal(scale=5.0, size=p.grid.n_cells), -np.inf)
+    cell_ok, logZ_next = random_log_Z(p, rng)
     weight = np.exp(moves.log_weight) * cell_ok[moves.target]
     with np.errstate(divide="ignore", invalid="ignore"):
         expected = np.log((weight * np.exp(logZ_next[moves.target])).sum(axis=1) / weight.sum(axis=1))
@@ -84,12 +94,10 @@ def test_a_successors_log_Z_is_the_mean_of_Z_over_its_allowed_vertices_with_thei
 def test_spreading_mass_reads_only_the_moves_that_carry_some_and_gives_the_same_bits():
     """The occupancy after one step (a successor's mass split over its vertices as lambda Z(vertex) / sum lambda Z)
     equals, bit for bit, the same bincount over every move (the moves without mass add exact zeros)."""
-    p = integrator_1d()
-    p = Problem(p.system, p.grid, [-0.37, 0.0, 0.41], 0.5, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    p = off_the_lattice()
     moves = pw.point_model(p).moves
     rng = np.random.default_rng(7)
-    cell_ok = rng.random(p.grid.n_cells) > 0.3
-    logZ_next = np.where(cell_ok, rng.normal(scale=5.0, size=p.grid.n_cells), -np.inf)
+    cell_ok, logZ_next = random_log_Z(p, rng)
     at = pw.successor_log_values(moves, logZ_next, cell_ok)
     mass = np.where(rng.random(moves.n_moves) < 0.3, rng.random(moves.n_moves), 0.0)
     with np.errstate(invalid="ignore"):
@@ -169,8 +177,7 @@ def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_th
     """Prefixes of 2 steps (their ends enter the gradient), controls that land between centres, a bound at 0.7:
     the expected features from the ends (:func:`.pointwise.expected_features`) against central differences of
     their log Z (:func:`.pointwise.point_log_values`)."""
-    p = integrator_1d()
-    p = Problem(p.system, p.grid, [-0.37, 0.0, 0.41], 0.5, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    p = off_the_lattice()
     states, controls, returns = enumerate_paths(p, [0.0], p.horizon)
     prob = np.where((states[:, :, 0] <= 0.7).all(axis=1), np.exp(returns - returns.max()), 0.0)
     picks = np.random.default_rng(2).choice(len(returns), size=4, p=prob / prob.sum())
