@@ -49,7 +49,8 @@ def ratio(a, b):
 
 
 def probabilities(q, total):
-    """exp(q - total) (owners, fan) with 0 where undefined: each move's probability within its owner."""
+    """exp(q - total) row by row (rows, k) with 0 where undefined: each move's probability within its owner, or
+    each vertex's share of a successor's value."""
     with np.errstate(invalid="ignore"):
         p = np.exp(q - total[:, None])
     p[~np.isfinite(p)] = 0.0
