@@ -91,21 +91,53 @@ def test_a_successors_log_Z_is_the_mean_of_Z_over_its_allowed_vertices_with_thei
     np.testing.assert_allclose(got[np.isfinite(got)], expected[np.isfinite(expected)], rtol=1e-12)
 
 
-def test_spreading_mass_reads_only_the_moves_that_carry_some_and_gives_the_same_bits():
-    """The occupancy after one step (a successor's mass split over its vertices as lambda Z(vertex) / sum lambda Z)
-    equals, bit for bit, the same bincount over every move (the moves without mass add exact zeros)."""
+def test_spreading_mass_keeps_it_whole_splits_it_as_lambda_Z_over_the_allowed_vertices_and_reads_only_moving_mass():
+    """The occupancy after one step, against the formula in plain NumPy over every move: a successor's mass split
+    over its vertices as lambda Z(vertex) / sum over its allowed vertices of lambda Z, so no mass is lost where a
+    vertex is forbidden (the total is the mass of the moves with an allowed vertex); the moves without mass are
+    skipped, which must not change a bit."""
     p = off_the_lattice()
     moves = pw.point_model(p).moves
     rng = np.random.default_rng(7)
     cell_ok, logZ_next = random_log_Z(p, rng)
-    at = pw.successor_log_values(moves, logZ_next, cell_ok)
+    norm = pw.successor_norm(moves, cell_ok)
+    at = pw.successor_log_values(moves, logZ_next, cell_ok, norm)
     mass = np.where(rng.random(moves.n_moves) < 0.3, rng.random(moves.n_moves), 0.0)
+    weight = np.exp(moves.log_weight + logZ_next[moves.target])
     with np.errstate(invalid="ignore"):
-        share = np.exp(moves.log_weight + logZ_next[moves.target] - at[:, None])
-    share[~np.isfinite(share)] = 0.0
+        share = np.nan_to_num(weight / weight.sum(axis=1, keepdims=True))
     every_move = np.bincount(moves.target.ravel(), weights=(mass[:, None] * share).ravel(), minlength=p.grid.n_cells)
-    got = pw._spread(moves, mass, logZ_next, at, p.grid.n_cells)
-    assert 0 < np.count_nonzero(mass) < moves.n_moves and np.array_equal(got, every_move) and got.sum() > 0
+    got = pw._spread(moves, mass, logZ_next, at, norm, p.grid.n_cells)
+    straddling = np.isfinite(at) & (norm > 0) & (mass > 0)
+    assert straddling.any() and 0 < np.count_nonzero(mass) < moves.n_moves
+    np.testing.assert_allclose(got, every_move, rtol=1e-12, atol=1e-15)
+    assert got.sum() == pytest.approx(mass[np.isfinite(at)].sum(), rel=1e-12)
+
+
+def test_the_satisfaction_ratio_equals_the_ratio_of_partition_functions_where_successors_straddle_a_bound():
+    """Theorem 2.3.1's F = Z_{C+} / Z_C by the ratio backup (:func:`.pointwise.satisfaction`, on the cells;
+    :func:`.pointwise.point_ratios`, at continuous points) against log Z computed under C and under C+
+    separately. Under the bound at 0.72 a move from the centre 0.5 lands at 0.705, between an allowed and a
+    forbidden vertex: the case that needs the shares renormalized."""
+    p = off_the_lattice()
+    model, w = pw.point_model(p), pw.file_weights(p) * np.array([1.0, 0.7, 1.3])
+    points = pw.point_moves(p, np.array([[0.1], [0.33], [-0.52]]))
+    for base in ([], [Bound(0, "upper", 0.72)]):
+        logZ = pw.log_partition(model, base, w)
+        candidates = [Bound(0, "upper", 0.3), Bound(0, "lower", -0.6)]
+        F = pw.satisfaction(model, logZ, base, candidates, w, {0: None, 1: None, 2: None})
+        at_points = pw.point_ratios(model, points, logZ[1], F[1], base, candidates, w)
+        for k, c in enumerate(candidates):
+            plus = base + [c]
+            logZ_plus = pw.log_partition(model, plus, w)
+            for t in (0, 2):
+                reached = np.isfinite(logZ[t])
+                exact = np.where(reached, np.exp(logZ_plus[t] - np.where(reached, logZ[t], 0.0)), 0.0)
+                np.testing.assert_allclose(F[t][:, k], exact, rtol=1e-12, atol=1e-14)
+            log_at = [pw.point_log_values(points, z[1], pw.allowed_moves(r, points),
+                                          pw.points_allowed(model, r).any(axis=1), w) for z, r in ((logZ, base),
+                                                                                                 (logZ_plus, plus))]
+            np.testing.assert_allclose(at_points[:, k], np.exp(log_at[1] - log_at[0]), rtol=1e-12)
 
 
 @pytest.mark.parametrize("bound", [None, 0.3, 0.75, 1.1])
@@ -169,22 +201,18 @@ def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_s
                for e in np.eye(w.size)]
     np.testing.assert_allclose(grad, numeric, rtol=1e-6, atol=1e-8)
 
-@pytest.mark.xfail(strict=True, reason="KNOWN BUG (found at stop 38, not fixed): pointwise._spread splits a successor's "
-                   "mass by lambda Z(vertex) / exp(at) without the renormalisation over its allowed vertices "
-                   "(successor_norm), so mass leaks where an allowed move's successor has a forbidden vertex "
-                   "(barycentric: the cart-pole near an accepted region); the gradient of the reward's weights "
-                   "is then off (here -1.3902 against -1.3953). Adding the successor's norm to the share's "
-                   "exponent makes this test pass (checked)")
-def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_the_lattice_under_a_bound():
-    """Prefixes of 2 steps (their ends enter the gradient), controls that land between centres, a bound at 0.7:
-    the expected features from the ends (:func:`.pointwise.expected_features`) against central differences of
-    their log Z (:func:`.pointwise.point_log_values`)."""
+@pytest.mark.parametrize("bound", [0.7, 0.72])
+def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_the_lattice_under_a_bound(bound):
+    """Prefixes of 2 steps (their ends enter the gradient), controls that land between centres: the expected
+    features from the ends (:func:`.pointwise.expected_features`) against central differences of their log Z
+    (:func:`.pointwise.point_log_values`). Under the bound at 0.7 the first step from an end straddles it (an
+    allowed successor with a forbidden vertex); under 0.72 a step between cells does (0.5 -> 0.705)."""
     p = off_the_lattice()
     states, controls, returns = enumerate_paths(p, [0.0], p.horizon)
-    prob = np.where((states[:, :, 0] <= 0.7).all(axis=1), np.exp(returns - returns.max()), 0.0)
+    prob = np.where((states[:, :, 0] <= bound).all(axis=1), np.exp(returns - returns.max()), 0.0)
     picks = np.random.default_rng(2).choice(len(returns), size=4, p=prob / prob.sum())
     data = ev.demonstrated(p, recording(states[picks][:, :3], controls[picks][:, :2], p.dt))
-    model, regions = pw.point_model(p), [Bound(0, "upper", 0.7)]
+    model, regions = pw.point_model(p), [Bound(0, "upper", bound)]
     w = pw.file_weights(p) * np.array([1.0, 0.7, 1.3])
     cell_ok = pw.points_allowed(model, regions).any(axis=1)
 

@@ -302,19 +302,28 @@ def satisfaction(model, logZ, regions, candidates, weights, times):
         at = successor_log_values(mv, logZ[t + 1], cell_ok, norm)
         q = move_reward + at
         p = probabilities(_by_owner(mv, q), logZ[t] + log0(ok.sum(axis=1)))
-        F = _weighted_sums(mv, p, extra, logZ[t + 1], at, F) * n_ratio
+        F = _weighted_sums(mv, p, extra, logZ[t + 1], at, norm, F) * n_ratio
         if t in times:
             out[t] = F
     return out
 
 
-def _weighted_sums(mv, p, extra, logZ_next, at, F_next):
+def vertex_shares(log_weight, target, logZ_next, at, norm):
+    """Each vertex's share of its successor's Z (P, k): lambda Z(vertex) / sum over the allowed vertices of
+    lambda Z, summing to 1 over a successor's vertices. ``at`` (:func:`successor_log_values`) includes the
+    interpolation's renormalisation ``norm`` (:func:`successor_norm`); the shares must not (0 where the
+    successor has no allowed vertex)."""
+    with np.errstate(invalid="ignore"):
+        return probabilities(log_weight + logZ_next[target], at - norm)
+
+
+def _weighted_sums(mv, p, extra, logZ_next, at, norm, F_next):
     """sum over each owner's moves of p * extra * F at the successor, F at a successor Z_C-weighted over its
-    vertices: lambda Z(vertex) / sum lambda Z."""
+    vertices (:func:`vertex_shares`); ``extra`` carries Lambda_C / Lambda_+."""
     if mv.target.shape[1] == 1:
         at_successor = np.take(F_next, mv.target[:, 0], axis=0)
     else:
-        share = probabilities(mv.log_weight + logZ_next[mv.target], at)
+        share = vertex_shares(mv.log_weight, mv.target, logZ_next, at, norm)
         at_successor = np.einsum("pk,pkc->pc", share, np.take(F_next, mv.target, axis=0))
     at_successor *= extra
     return np.einsum("of,ofc->oc", p, _by_owner(mv, at_successor))
@@ -331,24 +340,23 @@ def point_ratios(model, moves, logZ_next, F_next, regions, candidates, weights):
     """F_t = Z_{C+,t} / Z_{C,t} at continuous points (N, K), one exact step ahead of the grid's log Z_{C,t+1}
     and F_{t+1} (X, K): E_{a ~ pi_C}[Phi_{C+} F(f(s, a))] (module docstring)."""
     cell_ok, extra = _candidate_terms(model, moves, regions, candidates)
-    at = successor_log_values(moves, logZ_next, cell_ok)
+    norm = successor_norm(moves, cell_ok)
+    at = successor_log_values(moves, logZ_next, cell_ok, norm)
     q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
     p = probabilities(q, logsumexp(q, axis=1))
-    return _weighted_sums(moves, p, extra, logZ_next, at, F_next)
+    return _weighted_sums(moves, p, extra, logZ_next, at, norm, F_next)
 
 
-def _spread(moves, mass, logZ_next, at, n_cells):
+def _spread(moves, mass, logZ_next, at, norm, n_cells):
     """The cells' occupancy (X,) after the moves carry ``mass`` (P,) to their successors, a successor split
-    over its vertices by lambda Z(vertex) / exp(at) (KNOWN BUG: ``at`` is renormalized over the allowed vertices,
-    so these shares sum to their weight, not 1, where a vertex is forbidden; the strict xfail test in
-    tests/constraints/continuous/test_pointwise.py). Only the moves with mass are read:
-    the others add exact zeros, so the sums are the same to the last bit (most cells hold no mass in the first
-    steps from the demonstrated starts)."""
+    over its vertices by :func:`vertex_shares`. Only the moves with mass are read: the others add exact
+    zeros, so the sums are the same to the last bit (most cells hold no mass in the first steps from the
+    demonstrated starts)."""
     if moves.target.shape[1] == 1:
         return np.bincount(moves.target[:, 0], weights=np.where(np.isfinite(at), mass, 0.0), minlength=n_cells)
     moving = np.flatnonzero(mass)
     target = moves.target[moving]
-    share = probabilities(moves.log_weight[moving] + logZ_next[target], at[moving])
+    share = vertex_shares(moves.log_weight[moving], target, logZ_next, at[moving], norm[moving])
     return np.bincount(target.ravel(), weights=(mass[moving, None] * share).ravel(), minlength=n_cells)
 
 
@@ -363,18 +371,19 @@ def expected_features(model, moves, t0, logZ, regions, weights, successors=None)
     cell_ok, n_ok = ok.any(axis=1), ok.sum(axis=1)
     run = mv.features.shape[1]
     total = np.zeros(run + model.terminal_features.shape[2])
-    at = successor_log_values(moves, logZ[t0 + 1], cell_ok)
+    norm = successor_norm(moves, cell_ok)
+    at = successor_log_values(moves, logZ[t0 + 1], cell_ok, norm)
     q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
     p = probabilities(q, logsumexp(q, axis=1))
     total[:run] += np.einsum("of,ofk->k", p, _by_owner(moves, moves.features))
-    D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, X)
+    D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, norm, X)
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
-    norm = None if successors else successor_norm(mv, cell_ok)
+    norm = successor_norm(mv, cell_ok)
     for t in range(t0 + 1, T):
         at = successors[t] if successors else successor_log_values(mv, logZ[t + 1], cell_ok, norm)
         w = D[:, None] * probabilities(_by_owner(mv, move_reward + at), logZ[t] + log0(n_ok))
         total[:run] += np.einsum("of,ofk->k", w, _by_owner(mv, mv.features))
-        D = _spread(mv, w.reshape(-1), logZ[t + 1], at, X)
+        D = _spread(mv, w.reshape(-1), logZ[t + 1], at, norm, X)
     term = np.where(ok, terminal_rewards(model, weights), -np.inf)
     with np.errstate(invalid="ignore"):
         share = np.exp(term - logZ[T][:, None] - log0(n_ok)[:, None])
