@@ -2,9 +2,11 @@
 so no test ever writes into the committed ``figures/`` (or the scratch folder), and the notebook
 lane (``helpers.lane``): the notebooks' quick runs, once per session, beside the unit tests."""
 
+import atexit
 import gc
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -20,6 +22,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
 os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
 os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")  # each process its own
+atexit.register(shutil.rmtree, os.environ["MUTUAL_OUTPUT_DIR"], ignore_errors=True)
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
 from helpers.lane import LaneOutcomes, NotebookLane, needed_notebooks, sort_for_the_lane

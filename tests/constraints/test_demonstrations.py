@@ -94,18 +94,19 @@ MDP0 = G.mdp
 LOITER = GRID_ACTIONS.index("loiter")
 
 
-def _written():
-    path = Path(tempfile.mkdtemp(prefix="mutual-bad-")) / "demos.csv"
+def _written(folder):
+    path = Path(folder) / "demos.csv"
     write_demonstrations(path, sample_demonstrations(MDP0, 3, rng=2))
     return path
 
 
 def _load_edited(edit):
     """Write a valid demonstrations CSV, apply ``edit`` to its text lines, load it."""
-    path = _written()
-    lines = path.read_text().splitlines()
-    path.write_text("\n".join(edit(lines)) + "\n")
-    return load_demonstrations(path, MDP0)
+    with tempfile.TemporaryDirectory(prefix="mutual-bad-") as folder:
+        path = _written(folder)
+        lines = path.read_text().splitlines()
+        path.write_text("\n".join(edit(lines)) + "\n")
+        return load_demonstrations(path, MDP0)
 
 
 def _replace(line_no, column, value):
@@ -120,9 +121,10 @@ def _replace(line_no, column, value):
 
 
 def _empty_file():
-    path = Path(tempfile.mkdtemp(prefix="mutual-bad-")) / "empty.csv"
-    path.write_text("")
-    return load_demonstrations(path, MDP0)
+    with tempfile.TemporaryDirectory(prefix="mutual-bad-") as folder:
+        path = Path(folder) / "empty.csv"
+        path.write_text("")
+        return load_demonstrations(path, MDP0)
 
 
 def _off_goal_loiter():
@@ -162,8 +164,8 @@ def test_bad_input_raises_a_clear_error(fn, args, kwargs, error, phrase):
     assert phrase in str(info.value), f"message {str(info.value)!r} should mention {phrase!r}"
 
 
-def test_loader_messages_name_the_file():
-    path = _written()
+def test_loader_messages_name_the_file(tmp_path):
+    path = _written(tmp_path)
     df = pd.read_csv(path)
     df.loc[2, "action"] = np.nan
     df.to_csv(path, index=False)

@@ -24,11 +24,12 @@ HEADER = "participant,trial,time,x,y,theta\n"
 
 
 def _csv(text):
-    """A reader of a fresh CSV file holding ``text`` (written when the case runs)."""
+    """A reader of a fresh CSV file holding ``text`` (written when the case runs, removed after)."""
     def read():
-        path = Path(tempfile.mkdtemp(prefix="interventions-")) / "interventions.csv"
-        path.write_text(text)
-        return read_interventions(path)
+        with tempfile.TemporaryDirectory(prefix="interventions-") as folder:
+            path = Path(folder) / "interventions.csv"
+            path.write_text(text)
+            return read_interventions(path)
     return read
 
 
