@@ -22,7 +22,14 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1")
 os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
 os.environ["MUTUAL_OUTPUT_DIR"] = tempfile.mkdtemp(prefix="mutual-test-figures-")  # each process its own
-atexit.register(shutil.rmtree, os.environ["MUTUAL_OUTPUT_DIR"], ignore_errors=True)
+OUTPUT, KEEP_OUTPUT = os.environ["MUTUAL_OUTPUT_DIR"], []   # kept (and named) when a test of this process failed
+
+
+@atexit.register
+def _remove_output():
+    if not KEEP_OUTPUT:
+        shutil.rmtree(OUTPUT, ignore_errors=True)
+
 os.environ.setdefault("MUTUAL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".cache"))
 
 from helpers.lane import LaneOutcomes, NotebookLane, needed_notebooks, sort_for_the_lane
@@ -93,7 +100,12 @@ def pytest_testnodedown(node, error):
 
 
 def pytest_terminal_summary(terminalreporter, config):
-    """Where the notebook lane's time went: each quick run's wall time, and how long the tests waited for it."""
+    """Where the notebook lane's time went: each quick run's wall time, and how long the tests waited for it;
+    after a failure, where the executed notebooks and outputs were kept."""
+    if terminalreporter.stats.get("failed") or terminalreporter.stats.get("error"):
+        KEEP_OUTPUT.append(True)
+        terminalreporter.write_line(f"outputs kept (the lane's executed notebooks in {LANE_OUTPUT / 'executed'}): "
+                                    f"{OUTPUT} (the workers' beside it, mutual-test-figures-*)")
     lane = getattr(config, "_notebook_lane", None)
     if isinstance(lane, NotebookLane) and lane.seconds:
         runs = ", ".join(f"{stem[:2]} {sec:.0f} s" for stem, sec in lane.seconds.items())
@@ -103,6 +115,8 @@ def pytest_terminal_summary(terminalreporter, config):
 
 
 def pytest_sessionfinish(session):
+    if session.testsfailed:
+        KEEP_OUTPUT.append(True)
     lane = getattr(session.config, "_notebook_lane", None)
     if isinstance(lane, NotebookLane):
         lane.stop()

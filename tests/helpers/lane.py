@@ -104,6 +104,10 @@ class NotebookLane:
         self.stopped = True
         if self.process is not None and self.process.poll() is None:
             self.process.terminate()
+            try:
+                self.process.wait(timeout=10)   # gone before the session's output folder is removed
+            except subprocess.TimeoutExpired:
+                self.process.kill()
         if not self.thread.is_alive():
             for stem in self.stems:
                 if stem not in self.outcome:

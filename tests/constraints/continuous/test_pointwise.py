@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from mutual.constraints.continuous import Bound, Grid, Problem, QuadraticReward, Recording, named_system
+from mutual.constraints.continuous import Bound, Box, Disk, Grid, Problem, QuadraticReward, Recording, named_system
 from mutual.constraints.continuous import evidence as ev
 from mutual.constraints.continuous import pointwise as pw
 from mutual.constraints.continuous.systems import System
@@ -112,6 +112,9 @@ def test_spreading_mass_keeps_it_whole_splits_it_as_lambda_Z_over_the_allowed_ve
     assert straddling.any() and 0 < np.count_nonzero(mass) < moves.n_moves
     np.testing.assert_allclose(got, every_move, rtol=1e-12, atol=1e-15)
     assert got.sum() == pytest.approx(mass[np.isfinite(at)].sum(), rel=1e-12)
+    shares = pw.vertex_shares(moves.log_weight, moves.target, logZ_next, at, norm)
+    same_shares = np.bincount(moves.target.ravel(), weights=(mass[:, None] * shares).ravel(), minlength=p.grid.n_cells)
+    assert np.array_equal(got, same_shares)
 
 
 def test_the_satisfaction_ratio_equals_the_ratio_of_partition_functions_where_successors_straddle_a_bound():
@@ -268,3 +271,62 @@ def test_off_the_lattice_the_monte_carlo_cells_converge_to_enumeration():
             errors[(len(regions), cells)] = abs(value - exact)
     for k in (0, 1):
         assert errors[(k, 41)] < 0.05 and errors[(k, 161)] < 0.05 and errors[(k, 11)] > 2 * errors[(k, 161)]
+
+
+@pytest.fixture(scope="module")
+def plane():
+    """A double integrator on a 9 x 9 barycentric grid, 5 controls that land between centres, under a lower
+    velocity bound, a box and a disk (27 allowed moves reach a successor with a forbidden vertex, 3 of them two),
+    and 6 demonstrations of 5 steps drawn among the enumerated paths from two starts that satisfy them."""
+    di = named_system("double_integrator")
+    reward = QuadraticReward([1.0, 0.0], [1.0, 0.2], [0.1], [1.0, 0.5], 0.5)
+    grid = Grid.uniform([-1.5, -2.0], [2.5, 2.0], [9, 9], [False, False], di.state_names, di.state_units)
+    p = Problem(di, grid, [-1.0, -0.3, 0.0, 0.45, 1.0], 0.25, 5, reward, scheme="barycentric")
+    base = [Bound(1, "lower", -0.63), Box((0, 1), (0.9, 0.2), (1.6, 0.9)), Disk((0, 1), (-0.6, -0.9), 0.45)]
+    rng, states, controls = np.random.default_rng(3), [], []
+    for start in ([0.1, 0.2], [0.4, -0.3]):
+        S, U, _ = enumerate_paths(p, start, p.horizon)
+        keep = ~np.any([r.inside(S.reshape(-1, 2)).reshape(S.shape[:2]).any(axis=1) for r in base], axis=0)
+        picks = rng.choice(np.flatnonzero(keep), size=3, replace=False)
+        states.append(S[picks])
+        controls.append(U[picks])
+    return p, base, np.concatenate(states), np.concatenate(controls), pw.file_weights(p) * np.array([1.0, 1.3, 0.7, 1.1, 0.9])
+
+
+@pytest.mark.parametrize("steps", [5, 2])
+def test_in_two_dimensions_the_gradient_equals_finite_differences_where_successors_straddle_regions(plane, steps):
+    """A held-out case of the straddling class (2-D, a lower bound, a box, a disk; whole demonstrations and
+    prefixes): eq. 2.8's gradient against central differences of the exact log-likelihood."""
+    p, base, states, controls, w = plane
+    model = pw.point_model(p)
+    data = ev.demonstrated(p, recording(states[:, :steps + 1], controls[:, :steps], p.dt))
+    ll, logZ = ev.log_likelihood(model, data, base, w)
+    grad = ev.log_likelihood_gradient(model, data, base, w, logZ)
+    h = 1e-6
+    numeric = [(ev.log_likelihood(model, data, base, w + h * e)[0] - ev.log_likelihood(model, data, base, w - h * e)[0])
+               / (2 * h) for e in np.eye(w.size)]
+    assert np.isfinite(ll) and max(abs(n) for n in numeric) > 0.1
+    np.testing.assert_allclose(grad, numeric, rtol=1e-6, atol=1e-7)
+
+
+def test_in_two_dimensions_a_candidates_gain_equals_the_difference_of_exact_log_likelihoods(plane):
+    """The gains of bounds, a disk and a box added to a non-empty constraint set (F by the ratio backup,
+    :func:`.evidence.candidate_gains`) against the exact log-likelihoods with and without each, from prefixes
+    of 2 steps (their ends enter the gain), and F on the cells against Z_{C+} / Z_C at every time step."""
+    p, base, states, controls, w = plane
+    model = pw.point_model(p)
+    candidates = [Bound(0, "upper", 0.83), Bound(1, "lower", -0.2), Bound(0, "lower", -0.35),
+                  Disk((0, 1), (0.9, -0.6), 0.4), Box((0, 1), (-1.2, 0.3), (-0.5, 1.1))]
+    data = ev.demonstrated(p, recording(states[:, :3], controls[:, :2], p.dt))
+    ll, logZ = ev.log_likelihood(model, data, base, w)
+    gains = ev.candidate_gains(model, data, logZ, base, candidates, w)
+    exact = np.array([ev.log_likelihood(model, data, base + [c], w)[0] - ll for c in candidates])
+    assert np.isfinite(exact).sum() >= 3 and np.abs(exact[np.isfinite(exact)]).max() > 0.01
+    np.testing.assert_allclose(gains[np.isfinite(exact)], exact[np.isfinite(exact)], rtol=1e-9, atol=1e-9)
+    F = pw.satisfaction(model, logZ, base, candidates, w, set(range(p.horizon + 1)))
+    for k, c in enumerate(candidates):
+        logZ_plus = pw.log_partition(model, base + [c], w)
+        for t in range(p.horizon + 1):
+            reached = np.isfinite(logZ[t])
+            ratio = np.where(reached, np.exp(logZ_plus[t] - np.where(reached, logZ[t], 0.0)), 0.0)
+            np.testing.assert_allclose(F[t][:, k], ratio, rtol=1e-12, atol=1e-13)
