@@ -103,7 +103,6 @@ def pytest_terminal_summary(terminalreporter, config):
     """Where the notebook lane's time went: each quick run's wall time, and how long the tests waited for it;
     after a failure, where the executed notebooks and outputs were kept."""
     if terminalreporter.stats.get("failed") or terminalreporter.stats.get("error"):
-        KEEP_OUTPUT.append(True)
         terminalreporter.write_line(f"outputs kept (the lane's executed notebooks in {LANE_OUTPUT / 'executed'}): "
                                     f"{OUTPUT} (the workers' beside it, mutual-test-figures-*)")
     lane = getattr(config, "_notebook_lane", None)

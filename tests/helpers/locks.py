@@ -2,12 +2,9 @@
 
 import re
 
+from packaging.utils import canonicalize_name as canonical
+
 REQUIREMENT = re.compile(r"^([A-Za-z0-9_.\-]+)==([^\s;]+)(?:\s*;[^-]*)?\s+(--hash=sha256:[0-9a-f]{64}\s*)+$")
-
-
-def canonical(name):
-    """A distribution's name as PyPI compares them (PEP 503)."""
-    return re.sub(r"[-_.]+", "-", name).lower()
 
 
 def options(path):
@@ -21,7 +18,7 @@ def pins(path):
     found = {}
     for line in text.splitlines():
         line = line.split("#", 1)[0].strip()
-        if not line or line.startswith("--find-links"):  # pip only warns where that folder is missing
+        if not line:
             continue
         match = REQUIREMENT.match(line)
         assert match, f"{path.name}: not a pinned, hashed requirement: {line[:80]}"

@@ -75,6 +75,25 @@ def recording(states, controls, dt):
                      tuple(states), tuple(np.vstack([c, np.full((1, c.shape[1]), np.nan)]) for c in controls))
 
 
+def central_differences(value, w, h=1e-6):
+    """The gradient of ``value`` at the weights ``w`` by central differences."""
+    return np.array([(value(w + h * e) - value(w - h * e)) / (2 * h) for e in np.eye(w.size)])
+
+
+def likelihood_gradient_by_differences(model, data, regions, w):
+    return central_differences(lambda v: ev.log_likelihood(model, data, regions, v)[0], w)
+
+
+def assert_F_is_the_ratio_of_partition_functions(model, logZ, base, candidates, w, F):
+    """F_t (cells, candidates) at every time t of ``F`` against Z_{C+,t} / Z_{C,t} from separate log Z (0 where Z_C = 0)."""
+    for k, c in enumerate(candidates):
+        logZ_plus = pw.log_partition(model, base + [c], w)
+        for t, F_t in F.items():
+            reached = np.isfinite(logZ[t])
+            exact = np.where(reached, np.exp(logZ_plus[t] - np.where(reached, logZ[t], 0.0)), 0.0)
+            np.testing.assert_allclose(F_t[:, k], exact, rtol=1e-12, atol=1e-13)
+
+
 def test_a_successors_log_Z_is_the_mean_of_Z_over_its_allowed_vertices_with_their_weights_renormalized():
     """Off the lattice (controls that land between centres), log Z at each move's successor against the formula
     in plain NumPy: log(sum_v lambda_v Z(v) / sum_v lambda_v) over the allowed vertices, -inf where none is."""
@@ -125,22 +144,20 @@ def test_the_satisfaction_ratio_equals_the_ratio_of_partition_functions_where_su
     p = off_the_lattice()
     model, w = pw.point_model(p), pw.file_weights(p) * np.array([1.0, 0.7, 1.3])
     points = pw.point_moves(p, np.array([[0.1], [0.33], [-0.52]]))
+    candidates = [Bound(0, "upper", 0.3), Bound(0, "lower", -0.6)]
+
+    def log_Z_at_points(regions):
+        logZ = pw.log_partition(model, regions, w)
+        return pw.point_log_values(points, logZ[1], pw.allowed_moves(regions, points),
+                                   pw.points_allowed(model, regions).any(axis=1), w)
+
     for base in ([], [Bound(0, "upper", 0.72)]):
         logZ = pw.log_partition(model, base, w)
-        candidates = [Bound(0, "upper", 0.3), Bound(0, "lower", -0.6)]
         F = pw.satisfaction(model, logZ, base, candidates, w, {0: None, 1: None, 2: None})
+        assert_F_is_the_ratio_of_partition_functions(model, logZ, base, candidates, w, F)
         at_points = pw.point_ratios(model, points, logZ[1], F[1], base, candidates, w)
-        for k, c in enumerate(candidates):
-            plus = base + [c]
-            logZ_plus = pw.log_partition(model, plus, w)
-            for t in (0, 2):
-                reached = np.isfinite(logZ[t])
-                exact = np.where(reached, np.exp(logZ_plus[t] - np.where(reached, logZ[t], 0.0)), 0.0)
-                np.testing.assert_allclose(F[t][:, k], exact, rtol=1e-12, atol=1e-14)
-            log_at = [pw.point_log_values(points, z[1], pw.allowed_moves(r, points),
-                                          pw.points_allowed(model, r).any(axis=1), w) for z, r in ((logZ, base),
-                                                                                                 (logZ_plus, plus))]
-            np.testing.assert_allclose(at_points[:, k], np.exp(log_at[1] - log_at[0]), rtol=1e-12)
+        exact = np.stack([np.exp(log_Z_at_points(base + [c]) - log_Z_at_points(base)) for c in candidates], axis=1)
+        np.testing.assert_allclose(at_points, exact, rtol=1e-12)
 
 
 @pytest.mark.parametrize("bound", [None, 0.3, 0.75, 1.1])
@@ -199,10 +216,7 @@ def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_s
     ll, logZ = ev.log_likelihood(model, data, regions, w, successors)
     assert len(successors) == (p.horizon if keep_bytes else 0)
     grad = ev.log_likelihood_gradient(model, data, regions, w, logZ, successors)
-    h = 1e-6
-    numeric = [(ev.log_likelihood(model, data, regions, w + h * e)[0] - ev.log_likelihood(model, data, regions, w - h * e)[0]) / (2 * h)
-               for e in np.eye(w.size)]
-    np.testing.assert_allclose(grad, numeric, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(grad, likelihood_gradient_by_differences(model, data, regions, w), rtol=1e-6, atol=1e-8)
 
 @pytest.mark.parametrize("bound", [0.7, 0.72])
 def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_the_lattice_under_a_bound(bound):
@@ -225,9 +239,7 @@ def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_th
                                    weights).sum()
 
     expected = pw.expected_features(model, data.ends, data.steps, pw.log_partition(model, regions, w), regions, w)
-    h = 1e-6
-    numeric = [(log_z_at_the_ends(w + h * e) - log_z_at_the_ends(w - h * e)) / (2 * h) for e in np.eye(w.size)]
-    np.testing.assert_allclose(-expected, numeric, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(-expected, central_differences(log_z_at_the_ends, w), rtol=1e-6, atol=1e-8)
 
 
 def test_among_consistent_bounds_the_tightest_is_the_most_likely_by_enumeration():
@@ -302,10 +314,8 @@ def test_in_two_dimensions_the_gradient_equals_finite_differences_where_successo
     data = ev.demonstrated(p, recording(states[:, :steps + 1], controls[:, :steps], p.dt))
     ll, logZ = ev.log_likelihood(model, data, base, w)
     grad = ev.log_likelihood_gradient(model, data, base, w, logZ)
-    h = 1e-6
-    numeric = [(ev.log_likelihood(model, data, base, w + h * e)[0] - ev.log_likelihood(model, data, base, w - h * e)[0])
-               / (2 * h) for e in np.eye(w.size)]
-    assert np.isfinite(ll) and max(abs(n) for n in numeric) > 0.1
+    numeric = likelihood_gradient_by_differences(model, data, base, w)
+    assert np.isfinite(ll) and np.abs(numeric).max() > 0.1
     np.testing.assert_allclose(grad, numeric, rtol=1e-6, atol=1e-7)
 
 
@@ -324,9 +334,4 @@ def test_in_two_dimensions_a_candidates_gain_equals_the_difference_of_exact_log_
     assert np.isfinite(exact).sum() >= 3 and np.abs(exact[np.isfinite(exact)]).max() > 0.01
     np.testing.assert_allclose(gains[np.isfinite(exact)], exact[np.isfinite(exact)], rtol=1e-9, atol=1e-9)
     F = pw.satisfaction(model, logZ, base, candidates, w, set(range(p.horizon + 1)))
-    for k, c in enumerate(candidates):
-        logZ_plus = pw.log_partition(model, base + [c], w)
-        for t in range(p.horizon + 1):
-            reached = np.isfinite(logZ[t])
-            ratio = np.where(reached, np.exp(logZ_plus[t] - np.where(reached, logZ[t], 0.0)), 0.0)
-            np.testing.assert_allclose(F[t][:, k], ratio, rtol=1e-12, atol=1e-13)
+    assert_F_is_the_ratio_of_partition_functions(model, logZ, base, candidates, w, F)

@@ -371,12 +371,12 @@ def expected_features(model, moves, t0, logZ, regions, weights, successors=None)
     cell_ok, n_ok = ok.any(axis=1), ok.sum(axis=1)
     run = mv.features.shape[1]
     total = np.zeros(run + model.terminal_features.shape[2])
-    norm = successor_norm(moves, cell_ok)
-    at = successor_log_values(moves, logZ[t0 + 1], cell_ok, norm)
+    first_norm = successor_norm(moves, cell_ok)     # the first step, from the points
+    at = successor_log_values(moves, logZ[t0 + 1], cell_ok, first_norm)
     q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
     p = probabilities(q, logsumexp(q, axis=1))
     total[:run] += np.einsum("of,ofk->k", p, _by_owner(moves, moves.features))
-    D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, norm, X)
+    D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, first_norm, X)
     move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
     norm = successor_norm(mv, cell_ok)
     for t in range(t0 + 1, T):
