@@ -12,6 +12,7 @@ import subprocess
 import sys
 import threading
 import time
+import urllib.error
 import urllib.request
 
 import nbformat
@@ -148,6 +149,19 @@ def _get(url, method="GET", body=None):
         return json.loads(response.read() or b"null")
 
 
+def _wait_until_listening(url, proc, seconds=60):
+    """jupyter_server opens the browser before its event loop binds the port (``_bind_http_server`` is a callback
+    of the loop that starts after ``launch_browser``): wait for the first answer, as a browser's reload would."""
+    end = time.time() + seconds
+    while True:
+        try:
+            return _get(url)
+        except urllib.error.URLError as err:
+            if not isinstance(err.reason, ConnectionRefusedError) or time.time() > end or proc.poll() is not None:
+                raise
+            time.sleep(0.2)
+
+
 def test_make_lab_starts_on_the_overview_with_the_mutual_kernel(tmp_path):
     """`make lab` as this user (root included): the server starts, would open 00_overview.ipynb, offers the
     `mutual` kernel, and saves a notebook under notebooks/ without outputs."""
@@ -175,6 +189,7 @@ def test_make_lab_starts_on_the_overview_with_the_mutual_kernel(tmp_path):
         html = open(opened).read()
         assert f"localhost:{port}/lab/tree/notebooks/00_overview.ipynb" in html, html
         base = f"http://127.0.0.1:{port}/api"
+        _wait_until_listening(f"{base}/status?token={token}", proc)
         assert "mutual" in _get(f"{base}/kernelspecs?token={token}")["kernelspecs"]
         nb = _lab_autosave(nbformat.read(paths.NOTEBOOKS / "00_overview.ipynb", as_version=4))
         _get(f"{base}/contents/{scratch}?token={token}", "PUT", {"type": "notebook", "format": "json", "content": nb})
