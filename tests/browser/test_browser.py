@@ -22,14 +22,13 @@ import re
 import secrets
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
-import urllib.request
 from pathlib import Path
 
 import pytest
+from helpers.servers import free_port, wait_for_http
 from playwright.sync_api import expect
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -58,24 +57,6 @@ def step(page, name):
             page.screenshot(path=str(shot), full_page=False)
         message = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
         fail(f"{name} failed ({message}); screenshot {shot.relative_to(ROOT)}")
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def wait_for_http(url, process, what, timeout=120):
-    deadline = time.time() + timeout
-    while time.time() < deadline:
-        if process.poll() is not None:
-            fail(f"{what} exited with status {process.returncode} before answering on {url}")
-        with contextlib.suppress(OSError):
-            with urllib.request.urlopen(url, timeout=5):
-                return
-        time.sleep(0.5)
-    fail(f"{what} did not answer on {url} within {timeout} s")
 
 
 def stop(process):

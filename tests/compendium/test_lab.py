@@ -7,16 +7,15 @@ import os
 import queue
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import threading
 import time
-import urllib.error
 import urllib.request
 
 import nbformat
 import pytest
+from helpers.servers import free_port, wait_for_http
 
 import mutual.compendium.paths as paths
 from mutual.compendium.hygiene import dirty_cells, strip_before_save, stripped_text
@@ -136,12 +135,6 @@ def test_outputs_never_reach_a_commit(tmp_path):
     assert stripped_text(target.read_text()) == source.read_text()
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def _get(url, method="GET", body=None):
     request = urllib.request.Request(url, method=method, data=None if body is None else json.dumps(body).encode(),
                                      headers={"Content-Type": "application/json"})
@@ -149,25 +142,12 @@ def _get(url, method="GET", body=None):
         return json.loads(response.read() or b"null")
 
 
-def _wait_until_listening(url, proc, seconds=60):
-    """jupyter_server opens the browser before its event loop binds the port (``_bind_http_server`` is a callback
-    of the loop that starts after ``launch_browser``): wait for the first answer, as a browser's reload would."""
-    end = time.time() + seconds
-    while True:
-        try:
-            return _get(url)
-        except urllib.error.URLError as err:
-            if not isinstance(err.reason, ConnectionRefusedError) or time.time() > end or proc.poll() is not None:
-                raise
-            time.sleep(0.2)
-
-
 def test_make_lab_starts_on_the_overview_with_the_mutual_kernel(tmp_path):
     """`make lab` as this user (root included): the server starts, would open 00_overview.ipynb, offers the
     `mutual` kernel, and saves a notebook under notebooks/ without outputs."""
     if shutil.which("make") is None:
         pytest.skip("make is not installed")
-    port, token = _free_port(), "compendium-test"
+    port, token = free_port(), "compendium-test"
     flags = f"--port={port} --IdentityProvider.token={token} --ServerApp.browser='/bin/echo OPEN %s'"
     env = {**os.environ, "JUPYTER_RUNTIME_DIR": str(tmp_path / "runtime")}
     proc = subprocess.Popen(["make", "--no-print-directory", "lab", f"LABFLAGS={flags}"], cwd=paths.ROOT, env=env,
@@ -189,7 +169,7 @@ def test_make_lab_starts_on_the_overview_with_the_mutual_kernel(tmp_path):
         html = open(opened).read()
         assert f"localhost:{port}/lab/tree/notebooks/00_overview.ipynb" in html, html
         base = f"http://127.0.0.1:{port}/api"
-        _wait_until_listening(f"{base}/status?token={token}", proc)
+        wait_for_http(f"{base}/status?token={token}", proc, "make lab's JupyterLab")
         assert "mutual" in _get(f"{base}/kernelspecs?token={token}")["kernelspecs"]
         nb = _lab_autosave(nbformat.read(paths.NOTEBOOKS / "00_overview.ipynb", as_version=4))
         _get(f"{base}/contents/{scratch}?token={token}", "PUT", {"type": "notebook", "format": "json", "content": nb})
