@@ -219,3 +219,19 @@ def test_a_disk_is_not_proposed_where_the_demonstrations_pass_on_one_side_only()
     both = np.vstack([path + [0, 0.5], path - [0, 0.5]])
     assert any(isinstance(d, Disk) for d in search.largest_obstacles("disk", (0, 1), [[0.0, 0.0]], both, 1.0, 0.1))
     assert Bound(0, "upper", 1.0).kind == "bound"
+
+
+@pytest.mark.parametrize("temperature", ["fit", 0.5])
+@pytest.mark.parametrize("far", [[1.5, 1.75],                # its start: six steps from 1.5 leave the box (2.125)
+                                 [0.5, 1.0, 1.5, 1.75]])     # its end, at t = 3: three steps more leave the box
+def test_demonstrations_the_model_cannot_follow_within_the_box_are_refused_naming_them(far, temperature):
+    """With only forward controls (one or two cells a step: the lattice, where the grid is exact) the model must
+    leave the box within the horizon from where 'far' starts or ends: Z = 0 there, and the likelihood of any
+    reward is 0 (not +inf, not a silent fit)."""
+    p = lattice_problem()
+    p = Problem(p.system, p.grid, [0.5, 1.0], p.dt, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    near = np.arange(len(far)) * 0.25
+    rec = Recording(("near", "far"), (np.arange(len(far)) * p.dt,) * 2, (near[:, None], np.array(far)[:, None]))
+    with pytest.raises(ValueError, match=r"demonstration\(s\) 'far' start \(or end\), every path of the model leaves "
+                                         r"the state box within the horizon \(T = 6 steps"):
+        infer(p, rec, temperature=temperature)

@@ -160,13 +160,21 @@ def test_the_satisfaction_ratio_equals_the_ratio_of_partition_functions_where_su
         np.testing.assert_allclose(at_points, exact, rtol=1e-12)
 
 
+def in_box(problem, states):
+    """(n,) whether each enumerated path stays in the grid's box."""
+    return ~problem.grid.outside(states.reshape(-1, states.shape[2])).any(axis=1).reshape(states.shape[:2]).any(axis=1)
+
+
+@pytest.mark.parametrize("start", [0.0, 1.0])   # from 1.0 four steps of 0.25 can leave the box (high 1.625)
 @pytest.mark.parametrize("bound", [None, 0.3, 0.75, 1.1])
-def test_on_a_lattice_system_log_Z_at_the_start_equals_enumeration(bound):
+def test_on_a_lattice_system_log_Z_at_the_start_equals_enumeration_of_the_paths_that_stay_in_the_box(bound, start):
     p = integrator_1d()
-    start = [0.0]
+    start = [start]
     states, _, returns = enumerate_paths(p, start, p.horizon)
     regions = [] if bound is None else [Bound(0, "upper", bound)]
-    keep = np.ones(len(returns), dtype=bool) if bound is None else (states[:, :, 0] <= bound).all(axis=1)
+    keep = in_box(p, states) & (True if bound is None else (states[:, :, 0] <= bound).all(axis=1))
+    if start[0] == 1.0:
+        assert not in_box(p, states).all()  # the box acts
     model = pw.point_model(p)
     logZ = pw.log_partition(model, regions, p.reward.temperature)
     moves = pw.point_moves(p, np.array([start]))
@@ -195,6 +203,27 @@ def test_on_a_lattice_system_the_likelihood_and_the_gain_of_a_bound_equal_enumer
     assert gain == pytest.approx(truth_ll["bound"] - truth_ll["free"], abs=1e-8)
 
 
+
+def test_the_box_is_known_a_bound_at_its_edge_gains_nothing_and_one_inside_it_what_enumeration_says():
+    """Demonstrations near the box's upper edge (1.625), drawn from the paths that stay below 1.4: the bound at
+    the edge forbids no move the box allows (gain 0: clipping the moves that leave onto the box made it gain
+    what the box explains), and the one at 1.4 gains the exact difference of log-likelihoods by enumeration."""
+    p = integrator_1d()
+    states, controls, returns = enumerate_paths(p, [1.0], p.horizon)
+    box = in_box(p, states)
+    inside = box & (states[:, :, 0] <= 1.4).all(axis=1)
+    assert inside.sum() < box.sum() < len(box)
+    prob = np.where(inside, np.exp(returns - returns.max()), 0.0)
+    picks = np.random.default_rng(8).choice(len(returns), size=6, p=prob / prob.sum())
+    data = ev.demonstrated(p, recording(states[picks], controls[picks], p.dt))
+    model = pw.point_model(p)
+    ll, logZ = ev.log_likelihood(model, data, [], p.reward.temperature)
+    assert ll == pytest.approx(float(np.sum(returns[picks]) - len(picks) * log_Z(returns, box)), abs=1e-8)
+    exact = len(picks) * (log_Z(returns, box) - log_Z(returns, inside))
+    gains = ev.candidate_gains(model, data, logZ, [], [Bound(0, "upper", 1.625), Bound(0, "upper", 1.4)],
+                               p.reward.temperature)
+    assert gains[0] == pytest.approx(0.0, abs=1e-12)
+    assert gains[1] == pytest.approx(exact, abs=1e-8) and gains[1] > 0.1
 
 @pytest.mark.parametrize("keep_bytes", [pw.KEEP_BYTES, 0])
 @pytest.mark.parametrize("steps", [4, 2])  # whole demonstrations, and prefixes (their ends enter the gradient)

@@ -98,10 +98,24 @@ def log_likelihood(model, data, regions, weights, successors=None):
     logZ = pw.log_partition(model, regions, weights, successors)
     cell_ok = pw.points_allowed(model, regions).any(axis=1)
     z0 = pw.point_log_values(data.starts, logZ[1], pw.allowed_moves(regions, data.starts), cell_ok, weights)
+    if not np.isfinite(z0).all():   # a start from which no path of the model keeps out of C and in the box
+        return -math.inf, logZ
     zL = 0.0
     if data.ends is not None:
         zL = pw.point_log_values(data.ends, logZ[data.steps + 1], pw.allowed_moves(regions, data.ends), cell_ok, weights)
     return float(np.sum(_demonstrated_rewards(model, data, weights) + zL - z0)), logZ
+
+
+def stranded(model, data, regions=()):
+    """The demonstrations (indices) from whose start, or prefix's end, no path of the model keeps in the box
+    and out of ``regions`` to the horizon (Z = 0 there: the model cannot follow them, whatever the reward)."""
+    logZ = pw.log_partition(model, regions, 1.0)
+    cell_ok = pw.points_allowed(model, regions).any(axis=1)
+    ends = [(data.starts, 1)] + ([(data.ends, data.steps + 1)] if data.ends is not None else [])
+    dead = np.zeros(data.n, dtype=bool)
+    for moves, t in ends:
+        dead |= ~np.isfinite(pw.point_log_values(moves, logZ[t], pw.allowed_moves(regions, moves), cell_ok, 1.0))
+    return np.flatnonzero(dead)
 
 
 def log_likelihood_gradient(model, data, regions, weights, logZ, successors=None):

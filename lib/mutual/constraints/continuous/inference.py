@@ -231,6 +231,8 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
     start = time.perf_counter()
     regions, accepted, tables, temps, notes, stop = [], [], [], [], [], "rounds"
     tau, ll, logZ, edge, reference = _fit(pm, data, regions, temperature)
+    if not math.isfinite(ll):
+        _refuse_stranded(pm, data, recording)
     seconds["fit"] = time.perf_counter() - start
     say(0.4, "reward fitted" if temperature == "fit" else f"temperature {tau:g}")
     sizes = {"largest": largest, "smallest": smallest}
@@ -263,6 +265,16 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
     notes += _notes(problem, data, tables, accepted, edge, temperature)
     say(1.0, "done")
     return ContinuousInference(problem, data, accepted, tables, stop, temps, notes, seconds)
+
+
+def _refuse_stranded(model, data, recording):
+    """The error for demonstrations the model cannot follow within the box (:func:`.evidence.stranded`)."""
+    p, dead = model.problem, ev.stranded(model, data)
+    names = ", ".join(repr(str(recording.ids[i])) for i in dead[:5]) + (f" and {dead.size - 5} more" if dead.size > 5 else "")
+    raise ValueError(f"{recording.source}: from where demonstration(s) {names} start (or end), every path of the model "
+                     f"leaves the state box within the horizon (T = {p.horizon} steps of dt = {p.dt:g} s), so the model "
+                     "cannot follow them; widen [state] low/high on the coordinates they approach, or give the [control] "
+                     "values the demonstrator used")
 
 
 def _parameter(region, grid):

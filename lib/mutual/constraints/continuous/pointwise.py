@@ -16,13 +16,18 @@ risk the demonstrator, who knew its state, never ran.
 
     Z_T(s) = exp(w(s)/tau) Phi_C(s),    Z_t(s) = sum_a Phi_C(s, a) exp(r(s, a) dt/tau) Z_{t+1}(f(s, a)),
 
-with Phi_C(s, a) = 1 when neither s, f(s, a) nor the segment between them enters a forbidden region
-(eq. 3.1 with psi = 0: on a deterministic transition the chance of entering is 0 or 1, and eq. 3.3 on the
+with Phi_C(s, a) = 1 when neither s, f(s, a) nor the segment between them enters a forbidden region and
+f(s, a) stays in the state box (eq. 3.1 with psi = 0: on a deterministic transition the chance of entering is 0 or 1, and eq. 3.3 on the
 continuous demonstrations gives exactly psi* = 0). The policy is pi(a | s) = Phi exp(r) Z_{t+1}(f(s, a)) /
 Z_t(s) (eq. 2.19), so the log-likelihood of a demonstration telescopes to R(xi)/tau + log Z_L(s_L) -
 log Z_0(s_0) when it satisfies C (-inf otherwise), and a tightening C -> C+ that the demonstrations
 satisfy gains exactly -log F_0(s_0) + log F_L(s_L) with F = Z_{C+}/Z_C (eq. 2.25 is exact for
 deterministic dynamics; F_L = 1 when the demonstration spans the horizon).
+
+**The box is known.** Recordings must lie in the state box (``[state] low``/``high`` on the coordinates that
+do not wrap), so the modelled demonstrator stays in it too: a move whose successor leaves the box is not
+allowed, as one that enters a region is not. Clipping it onto the box instead would let the model leave where
+the demonstrator never could, and a bound at the box's edge would then gain what the box itself explains.
 
 **On the grid** Z_t is represented by averages over the *allowed* points of each cell: with the
 "sample" scheme the mean over the cell's ``samples`` points s_k outside every region of
@@ -55,7 +60,8 @@ class Moves:
     the controls, or a point's controls), owner by owner: ``point`` and ``successor`` (P, d), ``reward``
     (P,) r(point, u) dt (not tempered), the successor on the grid: ``target`` (P, k) cells with
     ``log_weight`` (P, k) (k = 1: its cell, log 1; barycentric: the d + 1 vertices and log weights), and
-    ``features`` (P, d + m): the reward's features e_i^2 dt and u_j^2 dt (r = -features . weights)."""
+    ``features`` (P, d + m): the reward's features e_i^2 dt and u_j^2 dt (r = -features . weights), and
+``in_box`` (P,) whether the successor lies in the state box (module docstring)."""
 
     point: np.ndarray
     successor: np.ndarray
@@ -64,6 +70,7 @@ class Moves:
     log_weight: np.ndarray
     fan: int
     features: np.ndarray
+    in_box: np.ndarray
 
     @property
     def n_moves(self):
@@ -115,11 +122,13 @@ def _moves(problem, point, successor, fan):
     controls = np.broadcast_to(problem.controls[None], (point.shape[0] // problem.n_actions, problem.n_actions, m))
     features = running_features(problem, point, controls.reshape(-1, m))
     reward = -features @ np.concatenate([problem.reward.state_weights, problem.reward.control_weights])
+    in_box = ~g.outside(successor).any(axis=1)
     if problem.scheme == "barycentric":
         vertices, weights = kuhn_weights(g, successor)
         with np.errstate(divide="ignore"):
-            return Moves(point, successor, reward, vertices, np.log(weights), fan, features)
-    return Moves(point, successor, reward, g.cell_of(successor)[:, None], np.zeros((point.shape[0], 1)), fan, features)
+            return Moves(point, successor, reward, vertices, np.log(weights), fan, features, in_box)
+    return Moves(point, successor, reward, g.cell_of(successor)[:, None], np.zeros((point.shape[0], 1)), fan, features,
+                 in_box)
 
 
 def point_model(problem, progress=None):
@@ -144,7 +153,7 @@ def point_model(problem, progress=None):
         if progress is not None:
             progress(int(cells[-1]) + 1, g.n_cells)
     joined = {f: np.concatenate([getattr(p, f) for p in parts])
-              for f in ("point", "successor", "reward", "target", "log_weight", "features")}
+              for f in ("point", "successor", "reward", "target", "log_weight", "features", "in_box")}
     moves = Moves(fan=A * M, **joined)
     flat = points.reshape(-1, g.ndim)
     terminal = problem.reward.terminal(g, flat).reshape(g.n_cells, M)
@@ -161,8 +170,9 @@ def point_moves(problem, points):
 
 
 def allowed_moves(regions, moves):
-    """Phi_C per move (P,): the move's point, its successor and its segment lie outside every region."""
-    ok = np.ones(moves.n_moves, dtype=bool)
+    """Phi_C per move (P,): the move's successor lies in the box, and its point, successor and segment outside
+    every region."""
+    ok = moves.in_box.copy()
     for region in regions:
         ok &= ~blocked(region, moves.point, moves.successor)
     return ok
