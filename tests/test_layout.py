@@ -182,3 +182,29 @@ def test_modules_stay_short(path):
 def test_each_subpackage_states_its_public_api(package):
     module = __import__(f"mutual.{package}", fromlist=["__all__"])
     assert module.__all__ and all(hasattr(module, n) for n in module.__all__)
+
+
+TESTS = ROOT / "tests"
+#: test folders that mirror no package folder (docs/ARCHITECTURE.md, "Tests")
+UNMIRRORED = ("cli", "compendium", "notebooks", "inputs", "browser", "helpers", "data")
+#: files that test a whole folder's invariants rather than one module
+ACROSS = ("test_properties.py", "test_layout.py")
+
+
+def _mirrored_tests():
+    return sorted(p for p in TESTS.rglob("test_*.py") if p.relative_to(TESTS).parts[0] not in UNMIRRORED
+                  and p.name not in ACROSS)
+
+
+@pytest.mark.parametrize("path", _mirrored_tests(), ids=lambda p: str(p.relative_to(TESTS)))
+def test_each_test_file_is_named_after_the_module_it_tests(path):
+    """tests/<package>/test_<module>[_<aspect>].py tests lib/mutual/<package>/<module>.py (test_<subpackage>.py
+    its face): a contributor finds a module's tests, and a new test's file, from the module's name alone."""
+    folder = PACKAGE.joinpath(*path.parent.relative_to(TESTS).parts)
+    words = path.stem.removeprefix("test_").split("_")
+    prefixes = ["_".join(words[:k]) for k in range(len(words), 0, -1)]
+    assert folder.is_dir(), f"{path.relative_to(ROOT)}: no package folder {folder.relative_to(ROOT)} to mirror"
+    named = any((folder / f"{p}.py").is_file() for p in prefixes) or (folder / prefixes[0] / "__init__.py").is_file()
+    assert named, (f"{path.relative_to(ROOT)}: its name starts with no module of {folder.relative_to(ROOT)}; name it "
+                   "test_<module>.py (or test_<module>_<aspect>.py) after the module it tests, in the folder that "
+                   "mirrors the module's package")

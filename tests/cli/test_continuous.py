@@ -12,6 +12,7 @@ from mutual.cli import continuous as cli_continuous
 from mutual.cli import main
 
 from helpers.cli import EXAMPLES, console
+from helpers.continuous import planar_system
 
 def double_integrator(low=-1.5, high=1.5, cells=15, dt=0.2, horizon=20, reward="", simulate=""):
     """A double-integrator system file heading for (1, 0) with the hidden wall velocity <= 0.5 in
@@ -188,3 +189,45 @@ def test_the_command_line_spells_out_the_candidate_families_and_defaults():
     from mutual.constraints.continuous.candidates import FAMILIES
     assert cli_continuous.FAMILIES == FAMILIES and set(inference.FAMILIES) == set(FAMILIES) - {"cell"}
     assert cli_continuous.MIN_GAIN["points"] == round(inference.MIN_GAIN, 3)
+
+
+def test_the_cli_runs_a_two_dimensional_control_end_to_end(tmp_path, capsys):
+    """simulate writes both control columns; infer-continuous reads them back and snaps every recorded step to
+    a control of the 2-D set (the demonstrator used only controls of the set: each snaps to itself)."""
+    path = planar_system(tmp_path)
+    assert main(["constraints", "simulate", "--system", str(path), "--out", str(tmp_path / "sim"),
+                 "--no-progress", "--json"]) == 0
+    simulated = json.loads(capsys.readouterr().out)
+    assert simulated["dynamics_file"] == str((tmp_path / "planar.py").resolve())
+    table = pd.read_csv(tmp_path / "sim" / "trajectories.csv")
+    assert {"vx", "vy"} <= set(table.columns) and (table["y"] <= 1.4 + 1e-9).all()
+    recorded = table[["vx", "vy"]].dropna().to_numpy()
+    assert {tuple(u) for u in recorded} <= {(1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (-1.0, 0.0), (0.0, 0.0)}
+    assert main(["constraints", "infer-continuous", str(tmp_path / "sim" / "trajectories.csv"), "--system", str(path),
+                 "--model", "cells", "--inline", "--rounds", "1", "--out", str(tmp_path / "inf"), "--no-progress",
+                 "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["controls"]["recorded_snapped"] == 6 * 12 and result["n_controls"] == 5
+    assert main(["constraints", "infer-continuous", str(tmp_path / "sim" / "trajectories.csv"), "--system", str(path),
+                 "--rounds", "1", "--out", str(tmp_path / "points"), "--no-progress", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)                       # the default points model uses them as recorded
+    assert result["model"] == "points" and result["n_controls"] == 5 and result["controls_inferred"] == 0
+
+
+def test_the_cli_names_the_system_file_for_a_failure_inside_the_dynamics(tmp_path, capsys):
+    trajectories = tmp_path / "t.csv"
+    trajectories.write_text("demo,t,x,y\na,0,0.25,1\na,0.25,0.5,1\n" + "".join(
+        f"a,{0.25 * k:g},{min(0.25 * (k + 1), 2.95):g},1\n" for k in range(2, 13)))
+    path = planar_system(tmp_path, "fails_later:f")
+    status = main(["constraints", "infer-continuous", str(trajectories), "--system", str(path), "--inline",
+                   "--rounds", "1", "--out", str(tmp_path / "o"), "--no-progress"])
+    err = capsys.readouterr().err                       # (after a warning: the recording rides the box's edge)
+    assert status == 2 and f"mutual constraints infer-continuous: error: {path}: key 'system': " in err
+    assert "fails_later.py" in err and "raised ArithmeticError: left the table at line 4 of" in err
+
+
+def test_the_cli_refuses_a_hidden_region_given_on_the_command_line_around_the_start(tmp_path, capsys):
+    path = planar_system(tmp_path)
+    status = main(["constraints", "simulate", "--system", str(path), "--hidden", "x <= 0.1", "--out",
+                   str(tmp_path / "o"), "--no-progress"])
+    assert status == 2 and "lies inside the hidden region 'x <= 0.1'" in capsys.readouterr().err

@@ -86,7 +86,6 @@ def test_an_unexpected_failure_is_one_line_with_status_1(tmp_path, monkeypatch, 
 
 
 def test_json_output_is_one_object_with_nan_as_null(tmp_path, monkeypatch, capsys):
-    import json
     monkeypatch.chdir(tmp_path)
     (tmp_path / "spec.toml").write_text(SPEC)
     assert main(["motion", "legible", "spec.toml", "--json", "--no-progress"]) == 0

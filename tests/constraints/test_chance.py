@@ -51,7 +51,6 @@ def test_psi_zero_is_a_hard_constraint_and_one_is_vacuous(world):
     assert not np.any(hard.states == x)
     # with slip and loiter at the goal only, every move may slip next to the forbidden cell, whose
     # neighbours then have no allowed action: no trajectory satisfies a hard state constraint
-    from mutual.constraints.backup import log_partition
     assert np.isneginf(log_partition(g.mdp, constraint_mask(g.mdp, [x], 0.0))[g.state(0, 0), 0])
     assert np.isfinite(log_partition(anywhere.mdp, constraint_mask(anywhere.mdp, [x], 0.0))[g.state(0, 0), 0])
     assert constraint_mask(g.mdp, [x], 1.0).all()

@@ -42,3 +42,57 @@ def write(tmp_path, name, text):
     path = tmp_path / name
     path.write_text(textwrap.dedent(text))
     return path
+
+
+# A planar system with a two-dimensional control, and user modules that go wrong in the usual ways
+
+PLANAR = textwrap.dedent("""\
+    system = "{spec}"
+    [state]
+    names = ["x", "y"]
+    units = ["m", "m"]
+    low = [0.0, 0.0]
+    high = [3.0, 2.0]
+    cells = [9, 6]
+    [control]
+    names = ["vx", "vy"]
+    units = ["m/s", "m/s"]
+    values = {values}
+    [time]
+    dt = 0.25
+    horizon = 12
+    [reward]
+    goal = [2.75, 1.0]
+    state_weights = [1.0, 1.0]
+    [simulate]
+    hidden = ["y <= 1.4"]
+    start = {start}
+    n = 6
+    fine_cells = [18, 12]
+    """)
+CONTROLS_2D = "[[1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 0.0]]"
+MODULES = {
+    "planar": "import numpy as np\ndef f(x, u, speed=1.0):\n    return speed * np.asarray(u, dtype=float)\n",
+    "one_state": "import numpy as np\ndef f(x, u):\n    px, py = x\n    return np.array([u[0], u[1]])\n",
+    "one_row": "import numpy as np\ndef f(x, u):\n    return np.array([u[0], u[1]])\n",
+    "exits": "import sys\nsys.exit(0)\n",
+    "raises": "raise RuntimeError('licence server unreachable')\n",
+    "fails_later": "import numpy as np\ndef f(x, u):\n    if (x[:, 0] > 2.9).any():\n        raise ArithmeticError("
+                   "'left the table')\n    return np.asarray(u, float)\n",
+}
+
+
+def planar_system(tmp_path, spec="planar:f", values=CONTROLS_2D, start="[0.25, 1.0]"):
+    """A planar system file (x' = u, a 2-D control set, a hidden wall y <= 1.4) in ``tmp_path`` with ``spec``'s
+    dynamics module beside it (``MODULES``: the good one and the usual mistakes in user code)."""
+    for name, source in MODULES.items():
+        (tmp_path / f"{name}.py").write_text(source)
+    path = tmp_path / f"{spec.split(':')[0]}.toml"
+    path.write_text(PLANAR.format(spec=spec, values=values, start=start))
+    return path
+
+
+def benchmark_case(case_id):
+    """The benchmark case named ``case_id``."""
+    from mutual.constraints.continuous.benchmark import all_cases
+    return next(c for c in all_cases() if c.id == case_id)

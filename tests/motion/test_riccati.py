@@ -25,7 +25,7 @@ def random_problem(rng, n=3, m=2, N=6):
 def recursion_controls(problem, xp=np, reg=None):
     """The optimal controls of ``problem`` from the backward pass of riccati_step, then the rollout."""
     A, B, c, H, g, QN, qN, x0 = problem
-    N, n = len(A), A.shape[1]
+    N = len(A)
     F = np.concatenate([A, B], axis=2)
     V, v, gains = xp.asarray(QN), xp.asarray(qN), []
     for t in reversed(range(N)):

@@ -5,7 +5,6 @@ import io
 
 import pandas as pd
 import pytest
-from scipy import stats
 
 from mutual.study import cohort, cohort_power as cp, sweep
 from mutual.study.cohort import study_value_functions

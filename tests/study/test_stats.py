@@ -193,7 +193,6 @@ def test_any_treatment_names_and_levels(names):
     assert res.levels == tuple(sorted(names)) and res.df1 == len(names) - 1
     d = res.to_dict()
     assert {"F", "df1", "df2", "p", "eps", "p_gg"} <= set(d) and d["levels"] == sorted(names)
-    import json
     json.dumps(d)                                           # plain values only
     pairs = tukey_rm(res)
     assert len(pairs) == len(names) * (len(names) - 1) // 2
@@ -255,7 +254,6 @@ def test_holm_matches_statsmodels():
 
 
 def test_pairwise_comparisons_are_json_ready(pairwise):
-    import json
     from mutual.study.stats import pairwise_comparisons
     res = rm_anova(pairwise, "Scores", "Drug", "Subject")
     rows = pairwise_comparisons(res, as_records=True)

@@ -13,7 +13,7 @@ import pandas as pd
 
 from .. import budget
 from ..atomic import atomic_path
-from ..inputs import number_column, place, read_csv
+from ..inputs import number_column, read_csv
 from ..seeds import generator
 from .mdp import MDP, check_mask, soft_policy
 

@@ -127,7 +127,7 @@ class BatchWorld:
     def _dead(self, words):
         """dead[t, x]: the sets (bits) under which no trajectory from x at time t satisfies them, t = 0..T-1;
         None when no set leaves any state without an action. Dead sets only grow back in time."""
-        T, (X, A, W) = self.mdp.horizon, words.shape
+        T, (X, _, W) = self.mdp.horizon, words.shape
         last = np.bitwise_and.reduce(words, axis=1)
         if not last.any():
             return None

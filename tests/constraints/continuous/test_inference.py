@@ -1,212 +1,184 @@
-"""Constraint inference from continuous demonstrations, against independent truth: on a tiny grid the whole
-ranking -- set chance thresholds (eq. 3.3 and Lemma 3.2.1), the forbidden actions, F and the exact
-likelihood gain -- equals brute-force enumeration written with plain loops; a hidden velocity limit is
-recovered from demonstrations of the true continuous system; recorded controls snap and missing ones are
-inferred exactly."""
+"""Greedy inference on the points model (``inference``) against independent truth: demonstrations sampled by
+enumeration from the exact maximum-entropy distribution of a lattice system (where the grid model is exact), a
+hand-written braking controller integrated with RK4, the likelihood interval's coverage computed exactly by
+enumeration; bad options, and demonstrations the model cannot follow within the box, refused with the reason."""
 
+import itertools
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from mutual.constraints import constraint_candidates, greedy_inference
-from mutual.constraints.continuous import (Bound, Grid, Problem, QuadraticReward, bound_regions, boundary_distance,
-                                           discretize, infer, infer_cells, parse_region, region_candidates, rollout,
-                                           soft_demonstrator, starts_around, to_demonstrations)
+from mutual.constraints.continuous import Grid, Problem, QuadraticReward, Recording, infer, named_system
+from mutual.constraints.continuous import search
+from mutual.constraints.continuous.inference import MIN_GAIN
+from mutual.constraints.continuous.systems import System
 
-from helpers.continuous import DI, recording_of
-
-
-TOLERANCE = 1e-9
+HERE = __file__.rsplit("/", 1)[0]
 
 
-def tiny(scheme="sample"):
-    grid = Grid.uniform([-1, -1], [1, 1], [6, 6], [False, False], DI.state_names, DI.state_units)
-    reward = QuadraticReward([0.6, 0.0], [1.0, 0.2], [0.05], [2.0, 1.0], temperature=0.5)
-    return Problem(DI, grid, [-1.0, 1.0], 0.25, 3, reward, scheme=scheme, samples=4, seed=3)
+def line(x, u):
+    return np.asarray(u, dtype=float).copy()
 
 
-def brute_values(S, r, w, T, allowed):
-    """V_t(x) of the constrained soft backup (eqs. 2.19-2.21) by loops; -inf for no allowed action."""
-    X, A = r.shape
-    V = [None] * (T + 1)
-    V[T] = list(w)
-    Q = [None] * T
-    for t in range(T - 1, -1, -1):
-        Q[t] = [[-math.inf] * A for _ in range(X)]
-        V[t] = [-math.inf] * X
-        for x in range(X):
-            total = 0.0
-            for a in range(A):
-                if not allowed[x][a]:
-                    continue
-                q = r[x, a]
-                for y in range(X):
-                    if S[x, a, y] > 0:
-                        q = -math.inf if V[t + 1][y] == -math.inf else q + S[x, a, y] * V[t + 1][y]
-                Q[t][x][a] = q
-                total += math.exp(q) if q > -math.inf else 0.0
-            V[t][x] = math.log(total) if total > 0 else -math.inf
-    return V, Q
+def lattice_problem(horizon=6, temperature=0.5):
+    """x' = u, u in {-0.5, 0, 0.5}, dt = 0.5: one 0.25-wide cell per step, barycentric (exact on the lattice)."""
+    system = System("test_inference:line", ("x",), ("m",), ("u",), ("m/s",), (), {}, HERE)
+    grid = Grid.uniform([-1.625], [2.125], [15], [False], ("x",), ("m",))
+    return Problem(system, grid, [-0.5, 0.0, 0.5], 0.5, horizon, QuadraticReward([1.5], [1.0], [0.1], [2.0], temperature),
+                   scheme="barycentric", substeps=1)
 
 
-def brute_score(S, r, w, T, allowed, demos):
-    V, Q = brute_values(S, r, w, T, allowed)
-    ll = 0.0
-    for xs, acts in zip(demos.states.tolist(), demos.actions.tolist()):
-        for t, a in enumerate(acts):
-            q = Q[t][xs[t]][a]
-            ll = -math.inf if q == -math.inf or ll == -math.inf else ll + q - V[t][xs[t]]
-    return V, ll
+def enumerated(problem, start=0.0):
+    """Every control sequence: states (n, T+1), controls (n, T), log-weight R / tau."""
+    p, T = problem, problem.horizon
+    seqs = np.array(list(itertools.product(range(p.n_actions), repeat=T)))
+    u = p.controls[seqs, 0]
+    x = start + np.concatenate([np.zeros((len(seqs), 1)), np.cumsum(u * p.dt, axis=1)], axis=1)
+    rate = -((x[:, :-1] - 1.5) ** 2 * 1.0 + u ** 2 * 0.1) * p.dt
+    R = (rate.sum(axis=1) - 2.0 * (x[:, -1] - 1.5) ** 2) / p.reward.temperature
+    return x, u, R
 
 
-def brute_candidate(S, inside, demos, rule):
-    """psi and the allowed table of the set chance constraint on the cells ``inside`` (entering only)."""
-    X, A, _ = S.shape
-    SR = [[sum(S[x, a, y] for y in range(X) if inside[y]) for a in range(A)] for x in range(X)]
-    psi = 0.0
-    for xs, acts in zip(demos.states.tolist(), demos.actions.tolist()):
-        for t, a in enumerate(acts):
-            if not inside[xs[t]]:
-                psi = max(psi, SR[xs[t]][a])
-    options = [psi] + sorted({SR[x][a] for x in range(X) for a in range(A) if SR[x][a] > psi + 1e-12})
-    return SR, options
+def sample(problem, n, bound, rng):
+    x, u, R = enumerated(problem)
+    keep = np.ones(len(R), bool) if bound is None else (x <= bound + 1e-12).all(axis=1)
+    w = np.where(keep, np.exp(R - R[keep].max()), 0.0)
+    picks = rng.choice(len(R), size=n, p=w / w.sum())
+    states = tuple(x[k][:, None] for k in picks)
+    return Recording(tuple(f"d{i}" for i in range(n)), tuple(np.arange(problem.horizon + 1) * problem.dt for _ in picks),
+                     states, tuple(np.r_[u[k], np.nan][:, None] for k in picks))
 
 
-def brute_ranking(problem, S_sparse, demos, regions, rule):
-    S = S_sparse.toarray().reshape(problem.grid.n_cells, problem.n_actions, -1)
-    r, w = problem.rewards()
-    X, A = r.shape
-    T = problem.horizon
-    V0, ll0 = brute_score(S, r, w, T, [[True] * A for _ in range(X)], demos)
-    out = {}
-    for region in regions:
-        inside = region.inside(problem.grid.centers())
-        if inside[demos.states.ravel()].any():
-            continue                                           # the demonstrations entered it: no candidate
-        SR, options = brute_candidate(S, inside, demos, rule)
-        for psi in (options if rule == "lemma" else options[:1]):
-            allowed = [[inside[x] or SR[x][a] <= psi + 1e-12 for a in range(A)] for x in range(X)]
-            V, ll = brute_score(S, r, w, T, allowed, demos)
-            if ll > -math.inf or rule == "eq3.3":
-                break
-        starts = demos.states[:, 0]
-        log_f = np.mean([V[0][s] - V0[0][s] for s in starts]) if ll > -math.inf else math.nan
-        out[region] = (psi, log_f, (ll - ll0) / demos.n if ll > -math.inf else -math.inf)
-    return out
+@pytest.mark.parametrize("draw", range(3))
+def test_demonstrations_of_the_exact_model_give_the_true_bound_and_no_constraint_without_one(draw):
+    """Sampled from the maximum-entropy distribution itself: under x <= 0.5 (which the task, going to 1.5,
+    pushes against) the accepted bound is the largest recorded x, which on this lattice is the truth; with
+    no constraint the tightest bound gains too little (the model is right: its gain is Exp(1) in all)."""
+    p = lattice_problem()
+    rng = np.random.default_rng(draw)
+    bounded = infer(p, sample(p, 20, 0.5, rng), rounds=2)
+    assert [r.describe(p.grid) for r in bounded.chosen_regions()][:1] == ["x <= 0.5 m"]
+    assert bounded.accepted[0]["gain"] >= MIN_GAIN * 20
+    free = infer(p, sample(p, 20, None, rng), rounds=2)
+    assert free.chosen_regions() == [] and free.stop == "min_gain"
+    assert free.best_rejected()["gain_refit"] < free.best_rejected()["needed"]
 
 
-@pytest.mark.parametrize("rule", ["eq3.3", "lemma"])
-@pytest.mark.parametrize("scheme", ["sample", "barycentric"])
-def test_on_a_tiny_grid_the_ranking_equals_brute_force_enumeration(rule, scheme):
-    problem = tiny(scheme)
-    rec = recording_of(problem, [(-0.7, 0.0), (-0.6, 0.3), (-0.8, -0.1)], [(1, 1, -1), (1, -1, -1), (1, 1, 1)])
-    S = discretize(problem, scheduler="inline")
-    mapped = to_demonstrations(problem, rec, S)
-    mdp = problem.mdp(mapped.transitions)
-    regions = bound_regions(problem.grid)
-    cand = region_candidates(mdp, mapped.demos, problem.grid, regions, thresholds=rule)
-    assert len(cand) >= 4
-    truth = brute_ranking(problem, mapped.transitions, mapped.demos, regions, rule)
-    for engine in ("numpy", "gather"):
-        result = greedy_inference(mdp, mapped.demos, cand.candidates, 1, engine=engine)
-        log_f, gain = result.log_f[0], result.gain[0]
-        for k, region in enumerate(cand.regions):
-            psi, want_log_f, want_gain = truth[region]
-            assert cand.candidates.psi[k] == pytest.approx(psi, abs=1e-12)
-            if np.isfinite(want_gain):
-                assert log_f[k] == pytest.approx(want_log_f, abs=TOLERANCE)
-                assert gain[k] == pytest.approx(want_gain, abs=TOLERANCE)
-            else:
-                assert not np.isfinite(gain[k])
-        order = sorted((k for k in range(len(cand)) if np.isfinite(gain[k])), key=lambda k: truth[cand.regions[k]][1])
-        assert result.chosen[0] == order[0]
+def test_the_likelihood_interval_covers_the_truth_at_least_95_percent_by_enumeration():
+    """One demonstration from the exact model under x <= b_true: the interval {b >= b* : log Z_b - log Z_b* <= log 20}
+    contains b_true with probability >= 0.95, summed exactly over every trajectory (b* = its largest x)."""
+    p = lattice_problem(horizon=5)
+    x, _, R = enumerated(p)
+    values = np.arange(0.0, 2.6, 0.25)
+    logZ = {v: np.log(np.exp(R[(x <= v + 1e-12).all(axis=1)]).sum()) for v in values}
+    for b_true in (0.5, 0.75, 1.0):
+        inside = (x <= b_true + 1e-12).all(axis=1)
+        prob = np.exp(R[inside] - np.log(np.exp(R[inside]).sum()))
+        covered = 0.0
+        for path, pr in zip(x[inside], prob):
+            top = float(path.max())
+            grid = values[values >= top - 1e-12]
+            gains = np.array([-logZ[v] for v in grid])
+            low, high = search.profile_interval(grid, gains, math.log(20))
+            covered += pr * (low - 1e-12 <= b_true <= high + 1e-12)
+        assert covered >= 0.95, (b_true, covered)
 
 
-def test_the_cells_family_is_chapter_3s_own_candidates():
-    problem = tiny()
-    rec = recording_of(problem, [(-0.7, 0.0), (-0.6, 0.3)], [(1, 1, -1), (1, -1, -1)])
-    mapped = to_demonstrations(problem, rec, discretize(problem, scheduler="inline"))
-    mdp = problem.mdp(mapped.transitions)
-    ours = region_candidates(mdp, mapped.demos, problem.grid, cells=True, thresholds="eq3.3").candidates
-    theirs = constraint_candidates(mdp, mapped.demos, actions=False)
-    for k, state in enumerate(ours.index):
-        j = theirs.find("state", state)
-        assert ours.psi[k] == theirs.psi[j]
-        assert (ours.forbidden_matrix[:, k] != theirs.forbidden_matrix[:, j]).nnz == 0
+def braking_demonstrations(n, wall, seed):
+    """A hand-written controller (PD towards 2.8 m, noise) with a safety filter that brakes before ``wall``
+    (full braking after the step must stop in time), integrated with RK4 -- nothing from the library."""
+    rng = np.random.default_rng(seed)
+    f = lambda x, u: np.array([x[1], u])   # noqa: E731
+    options = np.linspace(-1, 1, 41)
+
+    def step(x, u, dt=0.1, k=10):
+        for _ in range(k):
+            h = dt / k
+            k1 = f(x, u); k2 = f(x + h / 2 * k1, u); k3 = f(x + h / 2 * k2, u); k4 = f(x + h * k3, u)   # noqa: E702
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        return x
+
+    states, controls = [], []
+    for _ in range(n):
+        x, xs, us = np.array([rng.uniform(-0.2, 0.2), 0.0]), [], []
+        xs.append(x)
+        for _ in range(40):
+            u = float(np.clip(1.5 * (2.8 - x[0]) - 2.0 * x[1] + 0.3 * rng.standard_normal(), -1, 1))
+            if wall is not None:
+                after = [step(x, c) for c in options]
+                ok = np.array([z[0] <= wall and z[0] + max(z[1], 0) ** 2 / 2 <= wall for z in after])
+                u = float(options[ok][np.argmin(np.abs(options[ok] - u))]) if ok.any() else -1.0
+            x = step(x, u)
+            xs.append(x)
+            us.append(u)
+        states.append(np.array(xs))
+        controls.append(np.r_[us, np.nan][:, None])
+    return Recording(tuple(f"d{i}" for i in range(n)), tuple(np.arange(41) * 0.1 for _ in states), tuple(states),
+                     tuple(controls))
 
 
-def test_the_callback_sees_every_round_and_changes_nothing():
-    problem = tiny()
-    rec = recording_of(problem, [(-0.7, 0.0), (-0.6, 0.3)], [(1, 1, -1), (1, -1, -1)])
-    mapped = to_demonstrations(problem, rec, discretize(problem, scheduler="inline"))
-    mdp = problem.mdp(mapped.transitions)
-    cand = region_candidates(mdp, mapped.demos, problem.grid, bound_regions(problem.grid)).candidates
-    seen = []
-    a = greedy_inference(mdp, mapped.demos, cand, 3, min_gain=0.01, on_round=lambda *args: seen.append(args))
-    b = greedy_inference(mdp, mapped.demos, cand, 3, min_gain=0.01)
-    assert a.chosen == b.chosen and a.stop == b.stop
-    assert [s[3] for s in seen] == a.chosen + ([None] if a.stop == "min_gain" else [])
-
-
-@pytest.mark.parametrize("model", ["points", "cells"])
-def test_a_hidden_velocity_limit_is_recovered_from_demonstrations_of_the_continuous_system(model):
-    """A Boltzmann demonstrator on a 45 x 45 grid, rolled out on the true dynamics, never exceeds
-    0.5 m/s; inference on 15 x 15 cells puts the velocity's upper bound first: the points model at the
-    fastest recorded speed, the cells model at the cell edge above it (within one cell width, 0.2 m/s)."""
-    grid = Grid.uniform([-1.5, -1.5], [1.5, 1.5], [15, 15], [False, False], DI.state_names, DI.state_units)
-    reward = QuadraticReward([1.0, 0.0], [1.0, 0.1], [0.05], [5.0, 1.0], temperature=0.5)
-    problem = Problem(DI, grid, [-1.0, 0.0, 1.0], 0.2, 20, reward)
-    hidden = [parse_region("velocity <= 0.5", DI.state_names)]
-    demonstrator = soft_demonstrator(problem, hidden, [45, 45], scheduler="inline")
-    rec = rollout(demonstrator, starts_around([-1.0, 0.0], [0.1, 0.0], 20, seed=0), seed=1)
-    assert max(s[:, 1].max() for s in rec.states) <= 0.5
-    fastest = max(s[:, 1].max() for s in rec.states)
-    if model == "cells":
-        run = infer_cells(problem, rec, rounds=3, min_gain=0.1, scheduler="inline")
-        assert run.ranking().iloc[0]["constraint"] == "velocity <= 0.5 m/s"
-    else:
-        run = infer(problem, rec, rounds=3)
-        assert run.chosen_regions()[0].value == pytest.approx(fastest)
+def test_a_hand_written_braking_controller_reveals_its_wall_and_nothing_without_it():
+    di = named_system("double_integrator")
+    grid = Grid.uniform([-1, -2], [3.5, 2], [31, 31], [False, False], di.state_names, di.state_units)
+    problem = Problem(di, grid, [-1, -0.5, 0, 0.5, 1], 0.1, 40, QuadraticReward([2.8, 0], [1, 0.1], [0.1], [10, 1]))
+    walled = braking_demonstrations(12, 2.3, 1)
+    run = infer(problem, walled, rounds=2)
     first = run.chosen_regions()[0]
-    assert isinstance(first, Bound) and first.dim == 1 and first.side == "upper"
-    assert boundary_distance(first, hidden[0]) <= 0.2 + 1e-9
+    naive = max(s[:, 0].max() for s in walled.states)
+    assert first.describe(grid).startswith("position <=") and abs(first.value - 2.3) <= abs(naive - 2.3) + 0.05
+    low, high = run.accepted[0]["interval"]
+    assert low == pytest.approx(first.value) and low <= 2.3 <= high
+    assert infer(problem, braking_demonstrations(12, None, 2), rounds=2).chosen_regions() == []
 
 
-def test_recorded_controls_snap_and_missing_ones_are_inferred_exactly():
-    problem = tiny()
-    rec = recording_of(problem, [(-0.7, 0.0), (-0.6, 0.3)], [(1, 1, -1), (1, -1, -1)])
-    S = discretize(problem, scheduler="inline")
-    recorded = to_demonstrations(problem, rec, S)
-    noisy = replace(rec, controls=tuple(c + 0.2 * np.r_[1, -1, 1, 0][:, None] for c in rec.controls))
-    missing = replace(rec, controls=None)
-    for other, snapped, inferred in ((noisy, 6, 0), (missing, 0, 6)):
-        mapped = to_demonstrations(problem, other, S)
-        assert np.array_equal(mapped.demos.actions, recorded.demos.actions)
-        assert (mapped.snapped, mapped.inferred) == (snapped, inferred)
-    assert to_demonstrations(problem, missing, S).miss == pytest.approx(0.0, abs=1e-9)
-    assert "INFERRED" in to_demonstrations(problem, missing, S).notes()
+def test_progress_runs_up_to_one_and_the_model_can_be_reused():
+    from mutual.constraints.continuous import point_model
+    p = lattice_problem()
+    rec = sample(p, 5, 0.5, np.random.default_rng(1))
+    seen = []
+    first = infer(p, rec, rounds=1, progress=lambda f, d: seen.append(f))
+    assert seen[-1] == 1.0 and all(a <= b for a, b in zip(seen, seen[1:]))
+    again = infer(p, rec, rounds=1, points=point_model(p))
+    assert again.labels() == first.labels()
 
 
-def test_steps_the_model_gives_probability_zero_are_added_with_a_small_weight():
-    problem = tiny("barycentric")
-    rec = recording_of(problem, [(-0.7, 0.0), (-0.6, 0.3)], [(1, 1, -1), (1, -1, -1)])
-    S = discretize(problem, scheduler="inline")
-    jumped = replace(rec, states=tuple(np.where(np.arange(len(s))[:, None] == 2, s + [0.5, 0.0], s) for s in rec.states))
-    mapped = to_demonstrations(problem, jumped, S)
-    assert mapped.added >= 1
-    np.testing.assert_allclose(np.asarray(mapped.transitions.sum(axis=1)).ravel(), 1.0, atol=1e-12)
-    rows = mapped.demos.states[:, :-1] * problem.n_actions + mapped.demos.actions
-    assert np.all(np.asarray(mapped.transitions[rows.ravel(), mapped.demos.states[:, 1:].ravel()]) > 0)
+@pytest.mark.parametrize("options, message", [
+    ({"families": ("bound", "cell")}, "'cell' candidates need model='cells'"),
+    ({"families": ("blob",)}, "unknown family 'blob'"),
+    ({"rounds": 0}, "rounds: must be an integer >= 1"),
+    ({"min_gain": -1.0}, "min_gain: must be a finite number"),
+    ({"min_gain": float("nan")}, "min_gain"),
+    ({"temperature": 0.0}, "temperature: must be 'fit' or a positive number"),
+    ({"temperature": "hot"}, "temperature"),
+    ({"model": "grid"}, "model: must be 'points' or 'cells'"),
+    ({"thresholds": "lemma"}, "apply to model='cells' only"),
+])
+def test_bad_options_are_refused_with_the_reason(options, message):
+    p = lattice_problem()
+    rec = sample(p, 3, 0.5, np.random.default_rng(2))
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        infer(p, rec, **options)
 
 
-def test_measured_runs_fresh_or_in_this_process_with_the_same_result():
-    """Notebook 09's timer: a fresh process reports its peak memory; a quick run's (in this process) none."""
-    import math
-    from mutual.constraints.continuous import experiments
-    result, seconds, peak = experiments.measured(math.hypot, 3.0, 4.0)
-    assert result == 5.0 and seconds >= 0 and peak > 0
-    result, seconds, peak = experiments.measured(math.hypot, 3.0, 4.0, fresh=False)
-    assert result == 5.0 and seconds >= 0 and math.isnan(peak)
-    assert math.isnan(experiments.idle_memory(fresh=False))
+def test_a_point_model_of_another_problem_is_refused():
+    from mutual.constraints.continuous import point_model
+    p = lattice_problem()
+    with pytest.raises(ValueError, match="points: built for another problem"):
+        infer(p, sample(p, 3, 0.5, np.random.default_rng(3)), points=point_model(lattice_problem()))
+
+
+@pytest.mark.parametrize("temperature", ["fit", 0.5])
+@pytest.mark.parametrize("far", [[1.5, 1.75],                # its start: six steps from 1.5 leave the box (2.125)
+                                 [0.5, 1.0, 1.5, 1.75]])     # its end, at t = 3: three steps more leave the box
+def test_demonstrations_the_model_cannot_follow_within_the_box_are_refused_naming_them(far, temperature):
+    """With only forward controls (one or two cells a step: the lattice, where the grid is exact) the model must
+    leave the box within the horizon from where 'far' starts or ends: Z = 0 there, and the likelihood of any
+    reward is 0 (not +inf, not a silent fit)."""
+    p = lattice_problem()
+    p = Problem(p.system, p.grid, [0.5, 1.0], p.dt, p.horizon, p.reward, scheme="barycentric", substeps=1)
+    near = np.arange(len(far)) * 0.25
+    rec = Recording(("near", "far"), (np.arange(len(far)) * p.dt,) * 2, (near[:, None], np.array(far)[:, None]))
+    with pytest.raises(ValueError, match=r"demonstration\(s\) 'far' start \(or end\), every path of the model leaves "
+                                         r"the state box within the horizon \(T = 6 steps"):
+        infer(p, rec, temperature=temperature)

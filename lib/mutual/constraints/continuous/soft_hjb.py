@@ -76,7 +76,6 @@ class _Hamiltonian:
 
     def hamiltonian(self, state, time, value, grad_value):
         import jax
-        import jax.numpy as jnp
         q = jax.vmap(lambda u: self.rate(state, u) + grad_value @ self.f(state, u))(self.controls)
         if self.mode == "mean":
             return q.mean()

@@ -1,22 +1,21 @@
-"""What users get wrong in continuous recordings and system files, refused or warned with the reason.
+"""What users get wrong in continuous recordings (``mapping.check_recording``), refused or warned with the reason.
 
 The recordings are made here by integrating the true dynamics forward (the truth a forward recording
 follows); each mistake is then made on purpose -- t reversed, degrees, controls in another unit, a
 repeated column, too many steps -- and its siblings (rows in reverse order with t, which is fine) pass."""
 
-import json
-import textwrap
 import warnings
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from mutual.cli import main
 from mutual.constraints.continuous import (Grid, Problem, QuadraticReward, integrate, load_system, named_system,
-                                           read_recording, system_from_mapping)
+                                           read_recording)
 from mutual.constraints.continuous.mapping import check_recording
 from mutual.inputs import InputWarning
+
+from helpers.continuous import planar_system
 
 SYSTEM = named_system("pendulum")
 GRID = Grid.uniform([-np.pi, -8.0], [np.pi, 8.0], [9, 9], [True, False], SYSTEM.state_names, SYSTEM.state_units)
@@ -288,58 +287,6 @@ def test_two_controls_far_from_linear_with_every_sign_or_an_exchange_and_a_sign_
     assert len(said) == 1 and phrase in said[0], said
 
 
-# ---- system files -------------------------------------------------------------------------------
-
-PLANAR = textwrap.dedent("""\
-    system = "{spec}"
-    [state]
-    names = ["x", "y"]
-    units = ["m", "m"]
-    low = [0.0, 0.0]
-    high = [3.0, 2.0]
-    cells = [9, 6]
-    [control]
-    names = ["vx", "vy"]
-    units = ["m/s", "m/s"]
-    values = {values}
-    [time]
-    dt = 0.25
-    horizon = 12
-    [reward]
-    goal = [2.75, 1.0]
-    state_weights = [1.0, 1.0]
-    [simulate]
-    hidden = ["y <= 1.4"]
-    start = {start}
-    n = 6
-    fine_cells = [18, 12]
-    """)
-CONTROLS_2D = "[[1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 0.0]]"
-MODULES = {
-    "planar": "import numpy as np\ndef f(x, u, speed=1.0):\n    return speed * np.asarray(u, dtype=float)\n",
-    "one_state": "import numpy as np\ndef f(x, u):\n    px, py = x\n    return np.array([u[0], u[1]])\n",
-    "one_row": "import numpy as np\ndef f(x, u):\n    return np.array([u[0], u[1]])\n",
-    "exits": "import sys\nsys.exit(0)\n",
-    "raises": "raise RuntimeError('licence server unreachable')\n",
-    "fails_later": "import numpy as np\ndef f(x, u):\n    if (x[:, 0] > 2.9).any():\n        raise ArithmeticError("
-                   "'left the table')\n    return np.asarray(u, float)\n",
-}
-
-
-def _system(tmp_path, spec="planar:f", values=CONTROLS_2D, start="[0.25, 1.0]"):
-    for name, source in MODULES.items():
-        (tmp_path / f"{name}.py").write_text(source)
-    path = tmp_path / f"{spec.split(':')[0]}.toml"
-    path.write_text(PLANAR.format(spec=spec, values=values, start=start))
-    return path
-
-
-def test_a_two_dimensional_control_set_is_read(tmp_path):
-    problem = load_system(_system(tmp_path)).problem
-    assert problem.controls.tolist() == [[1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 0.0]]
-    assert problem.system.file == str((tmp_path / "planar.py").resolve())
-
-
 def _planar_recording(problem, n, seed):
     """``n`` demonstrations of 12 steps of the planar system (it moves by u dt) under random controls of the set,
     the zero control where a step would leave the box, as the CSV table."""
@@ -357,7 +304,7 @@ def _planar_recording(problem, n, seed):
 def test_one_control_of_two_with_its_sign_reversed_or_the_columns_exchanged_are_named(tmp_path):
     """Planar recordings with 'vy' negated in the file: the warning names 'vy' (about -1 times) and not 'vx'
     (whose recorded values explain the steps); then the two columns' names exchanged: both are named."""
-    problem = load_system(_system(tmp_path)).problem
+    problem = load_system(planar_system(tmp_path)).problem
     frame = _planar_recording(problem, 3, seed=3)
     path = tmp_path / "planar.csv"
     frame.assign(vy=-frame["vy"]).to_csv(path, index=False)
@@ -384,7 +331,7 @@ def test_one_demonstration_too_short_to_fit_is_still_named(change, phrase, units
     """Six planar demonstrations of 12 steps, one of them with a mistake: 12 steps are too few to fit a 2 x 2 map
     and offset (24 are needed), so the usual changes are tried as they are, and the one that explains it is named
     (asking about other units only beside a factor)."""
-    problem = load_system(_system(tmp_path)).problem
+    problem = load_system(planar_system(tmp_path)).problem
     frame = _planar_recording(problem, 6, seed=5)
     odd = frame["demo"] == "d4"
     frame = pd.concat([frame[~odd], change(frame[odd])]).sort_index()
@@ -396,100 +343,3 @@ def test_one_demonstration_too_short_to_fit_is_still_named(change, phrase, units
     assert len(said) == 1 and "demonstrations 'd4' (1 of 6)" in said[0] and phrase in said[0], said
     assert ("were they recorded in other units?" in said[0]) == units, said
 
-
-SYSTEM_MISTAKES = [  # (case, spec, [control] values, [simulate] start, phrases of the error)
-    ("a control of the wrong length", "planar:f", "[[1.0, 0.0], [0.0]]", "[0.25, 1.0]",
-     ["key 'control.values'", "each a list of 2 numbers"]),
-    ("a control that is not a number", "planar:f", "[[1.0, 0.0], [0.0, 'up']]", "[0.25, 1.0]",
-     ["key 'control.values[1]': must be a list of 2 numbers, got [0.0, 'up']"]),
-    ("dynamics for one state at a time (unpacking)", "one_state:f", CONTROLS_2D, "[0.25, 1.0]",
-     ["key 'system'", "one_state.py", "written for one state at a time", "x[:, 0]"]),
-    ("dynamics for one state at a time (one row back)", "one_row:f", CONTROLS_2D, "[0.25, 1.0]",
-     ["key 'system'", "returned shape (2, 2) for states of shape (4, 2)", "written for one state at a time"]),
-    ("sys.exit(0) at import", "exits:f", CONTROLS_2D, "[0.25, 1.0]",
-     ["key 'system'", "importing module 'exits'", "exits.py", "called sys.exit(0)"]),
-    ("a raise at import", "raises:f", CONTROLS_2D, "[0.25, 1.0]",
-     ["importing module 'raises'", "raised RuntimeError: licence server unreachable at line 1 of"]),
-    ("a start inside the hidden region", "planar:f", CONTROLS_2D, "[0.25, 1.6]",
-     ["key 'simulate.start'", "[0.25, 1.6] lies inside the hidden region 'y <= 1.4'"]),
-    ("own dynamics without state names", "planar:f", CONTROLS_2D, "[0.25, 1.0]",
-     ["key 'state.names': missing: a system given as 'module:function' names its 2 state coordinates"]),
-    ("own dynamics without control names", "planar:f", CONTROLS_2D, "[0.25, 1.0]",
-     ["key 'control.names': missing: a system given as 'module:function' names its controls"]),
-]
-
-
-@pytest.mark.parametrize("case, spec, values, start, phrases", SYSTEM_MISTAKES, ids=[c[0] for c in SYSTEM_MISTAKES])
-def test_mistakes_in_system_files_name_the_file_and_the_key(case, spec, values, start, phrases, tmp_path):
-    path = _system(tmp_path, spec, values, start)
-    if "without" in case:                                  # the same file, that table's names commented out
-        text = path.read_text()
-        at = text.index("[state]" if "state" in case else "[control]")
-        path.write_text(text[:at] + text[at:].replace("names = ", "# names = ", 1))
-    with pytest.raises(ValueError) as err:
-        load_system(path)
-    assert str(err.value).startswith(str(path)) and all(p in str(err.value) for p in phrases), err.value
-
-
-@pytest.mark.parametrize("low, high, phrase", [
-    ([-180.0, -8.0], [180.0, 8.0], "wraps with period high - low = 360, not 2 pi = 6.28319 (degrees?)"),
-    ([0.0, -8.0], [3.14159, 8.0], "wraps with period high - low = 3.14159, not 2 pi"),
-])
-def test_a_periodic_angle_whose_box_is_not_one_turn_in_radians_is_refused(low, high, phrase):
-    mapping = {"system": "pendulum", "state": {"low": low, "high": high, "cells": [9, 9], "periodic": ["theta"]},
-               "control": {"values": [-3.0, 3.0]}, "time": {"dt": 0.1, "horizon": 10}, "reward": {"goal": [0.0, 0.0]}}
-    with pytest.raises(ValueError, match=r"s\.toml: key 'state\.high': the periodic coordinate 'theta' \(rad\)"):
-        system_from_mapping(mapping, "s.toml")
-    with pytest.raises(ValueError) as err:
-        system_from_mapping(mapping, "s.toml")
-    assert phrase in str(err.value)
-    mapping["state"].update(low=[0.0, -8.0], high=[2 * np.pi, 8.0])
-    system_from_mapping(mapping, "s.toml")                                   # [0, 2 pi] is one turn too
-
-
-def test_the_cli_runs_a_two_dimensional_control_end_to_end(tmp_path, capsys):
-    """simulate writes both control columns; infer-continuous reads them back and snaps every recorded step to
-    a control of the 2-D set (the demonstrator used only controls of the set: each snaps to itself)."""
-    path = _system(tmp_path)
-    assert main(["constraints", "simulate", "--system", str(path), "--out", str(tmp_path / "sim"),
-                 "--no-progress", "--json"]) == 0
-    simulated = json.loads(capsys.readouterr().out)
-    assert simulated["dynamics_file"] == str((tmp_path / "planar.py").resolve())
-    table = pd.read_csv(tmp_path / "sim" / "trajectories.csv")
-    assert {"vx", "vy"} <= set(table.columns) and (table["y"] <= 1.4 + 1e-9).all()
-    recorded = table[["vx", "vy"]].dropna().to_numpy()
-    assert {tuple(u) for u in recorded} <= {(1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (-1.0, 0.0), (0.0, 0.0)}
-    assert main(["constraints", "infer-continuous", str(tmp_path / "sim" / "trajectories.csv"), "--system", str(path),
-                 "--model", "cells", "--inline", "--rounds", "1", "--out", str(tmp_path / "inf"), "--no-progress",
-                 "--json"]) == 0
-    result = json.loads(capsys.readouterr().out)
-    assert result["controls"]["recorded_snapped"] == 6 * 12 and result["n_controls"] == 5
-    assert main(["constraints", "infer-continuous", str(tmp_path / "sim" / "trajectories.csv"), "--system", str(path),
-                 "--rounds", "1", "--out", str(tmp_path / "points"), "--no-progress", "--json"]) == 0
-    result = json.loads(capsys.readouterr().out)                       # the default points model uses them as recorded
-    assert result["model"] == "points" and result["n_controls"] == 5 and result["controls_inferred"] == 0
-
-
-def test_the_cli_names_the_system_file_for_a_failure_inside_the_dynamics(tmp_path, capsys):
-    trajectories = tmp_path / "t.csv"
-    trajectories.write_text("demo,t,x,y\na,0,0.25,1\na,0.25,0.5,1\n" + "".join(
-        f"a,{0.25 * k:g},{min(0.25 * (k + 1), 2.95):g},1\n" for k in range(2, 13)))
-    path = _system(tmp_path, "fails_later:f")
-    status = main(["constraints", "infer-continuous", str(trajectories), "--system", str(path), "--inline",
-                   "--rounds", "1", "--out", str(tmp_path / "o"), "--no-progress"])
-    err = capsys.readouterr().err                       # (after a warning: the recording rides the box's edge)
-    assert status == 2 and f"mutual constraints infer-continuous: error: {path}: key 'system': " in err
-    assert "fails_later.py" in err and "raised ArithmeticError: left the table at line 4 of" in err
-
-
-def test_the_cli_refuses_a_hidden_region_given_on_the_command_line_around_the_start(tmp_path, capsys):
-    path = _system(tmp_path)
-    status = main(["constraints", "simulate", "--system", str(path), "--hidden", "x <= 0.1", "--out",
-                   str(tmp_path / "o"), "--no-progress"])
-    assert status == 2 and "lies inside the hidden region 'x <= 0.1'" in capsys.readouterr().err
-
-
-def test_a_system_mapping_still_reads_without_a_file():
-    mapping = {"system": "pendulum", "state": {"low": [-3.14, -8.0], "high": [3.14, 8.0], "cells": [9, 9]},
-               "control": {"values": [-3.0, 3.0]}, "time": {"dt": 0.1, "horizon": 10}, "reward": {"goal": [3.14, 0.0]}}
-    assert system_from_mapping(mapping, "inline").problem.system.file is None
