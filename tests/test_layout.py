@@ -186,25 +186,36 @@ def test_each_subpackage_states_its_public_api(package):
 
 TESTS = ROOT / "tests"
 #: test folders that mirror no package folder (docs/ARCHITECTURE.md, "Tests")
-UNMIRRORED = ("cli", "compendium", "notebooks", "inputs", "browser", "helpers", "data")
+UNMIRRORED = ("notebooks", "browser", "helpers", "data")
 #: files that test a whole folder's invariants rather than one module
 ACROSS = ("test_properties.py", "test_layout.py")
+#: tests/compendium/ files that check a file or make target of the repository rather than a module: what they check
+ARTEFACTS = {"test_bench_runner.py": "bench/run.py", "test_binder.py": "binder", "test_book.py": "book/build.py",
+             "test_citation.py": "CITATION.cff", "test_install.py": "installer.lock", "test_lab.py": "Makefile",
+             "test_peers_lock.py": "bench/peers"}
 
 
 def _mirrored_tests():
     return sorted(p for p in TESTS.rglob("test_*.py") if p.relative_to(TESTS).parts[0] not in UNMIRRORED
-                  and p.name not in ACROSS)
+                  and p.name not in ACROSS and not (p.parent.name == "compendium" and p.name in ARTEFACTS))
 
 
 @pytest.mark.parametrize("path", _mirrored_tests(), ids=lambda p: str(p.relative_to(TESTS)))
 def test_each_test_file_is_named_after_the_module_it_tests(path):
-    """tests/<package>/test_<module>[_<aspect>].py tests lib/mutual/<package>/<module>.py (test_<subpackage>.py
-    its face): a contributor finds a module's tests, and a new test's file, from the module's name alone."""
+    """tests/<package>/test_<module>[_<aspect>].py tests lib/mutual/<package>/<module>.py, and
+    test_<package>[_<aspect>].py the package as a whole (tests/cli/test_cli.py); a subpackage's tests live in its own
+    folder: a contributor finds a module's tests, and a new test's file, from the module's name alone."""
     folder = PACKAGE.joinpath(*path.parent.relative_to(TESTS).parts)
     words = path.stem.removeprefix("test_").split("_")
     prefixes = ["_".join(words[:k]) for k in range(len(words), 0, -1)]
     assert folder.is_dir(), f"{path.relative_to(ROOT)}: no package folder {folder.relative_to(ROOT)} to mirror"
-    named = any((folder / f"{p}.py").is_file() for p in prefixes) or (folder / prefixes[0] / "__init__.py").is_file()
+    named = any((folder / f"{p}.py").is_file() or p == folder.name for p in prefixes) or \
+        (folder / prefixes[0] / "__init__.py").is_file()
     assert named, (f"{path.relative_to(ROOT)}: its name starts with no module of {folder.relative_to(ROOT)}; name it "
                    "test_<module>.py (or test_<module>_<aspect>.py) after the module it tests, in the folder that "
                    "mirrors the module's package")
+
+
+@pytest.mark.parametrize("name, artefact", sorted(ARTEFACTS.items()))
+def test_the_compendium_tests_of_repository_files_name_files_that_exist(name, artefact):
+    assert (TESTS / "compendium" / name).is_file() and (ROOT / artefact).exists(), (name, artefact)

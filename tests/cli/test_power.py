@@ -52,7 +52,7 @@ def test_mutual_study_power_through_the_command_line(capsys, tmp_path, monkeypat
 
 
 def test_the_command_builds_without_the_numerical_stack():
-    """Wired into `mutual`, `mutual --help` still imports neither numpy nor jax (tests/cli/test_main.py's rule)."""
+    """Wired into `mutual`, `mutual --help` still imports neither numpy nor jax (tests/cli/test_cli.py's rule)."""
     from mutual.cli import power as cli
     assert set(cli.MIX_NAMES) == set(cp.MIXES)
     code = ("import sys, mutual.cli.study as s; s.EXTENSIONS = ('power',); import mutual.cli as c; c.build_parser(); "

@@ -22,7 +22,8 @@ HERE = __file__.rsplit("/", 1)[0]
 
 
 def integrator_1d(cells=13, horizon=4, temperature=0.7):
-    """x' = u on [-1.5, 1.75] with 13 cells of 0.25; u in {-0.5, 0, 0.5} for dt = 0.5: one cell per step."""
+    """x' = u on the box [-1.625, 1.625] (13 cells of 0.25, centres -1.5 .. 1.5); u in {-0.5, 0, 0.5} for dt = 0.5:
+    one cell per step."""
     system = System("test_pointwise:line", ("x",), ("m",), ("u",), ("m/s",), (), {}, HERE)
     grid = Grid.uniform([-1.625], [1.625], [cells], [False], ("x",), ("m",))
     reward = QuadraticReward([0.75], [1.0], [0.2], [2.0], temperature)
@@ -165,16 +166,17 @@ def in_box(problem, states):
     return ~problem.grid.outside(states.reshape(-1, states.shape[2])).any(axis=1).reshape(states.shape[:2]).any(axis=1)
 
 
-@pytest.mark.parametrize("start", [0.0, 1.0])   # from 1.0 four steps of 0.25 can leave the box (high 1.625)
-@pytest.mark.parametrize("bound", [None, 0.3, 0.75, 1.1])
+@pytest.mark.parametrize("bound, start", [(None, 0.0), (0.3, 0.0), (0.75, 0.0), (1.1, 0.0),
+                                          (None, 1.0), (2.0, 1.0)])  # from 1.0 four steps of 0.25 can leave the box
 def test_on_a_lattice_system_log_Z_at_the_start_equals_enumeration_of_the_paths_that_stay_in_the_box(bound, start):
     p = integrator_1d()
     start = [start]
     states, _, returns = enumerate_paths(p, start, p.horizon)
     regions = [] if bound is None else [Bound(0, "upper", bound)]
-    keep = in_box(p, states) & (True if bound is None else (states[:, :, 0] <= bound).all(axis=1))
+    satisfy = np.ones(len(returns), dtype=bool) if bound is None else (states[:, :, 0] <= bound).all(axis=1)
+    keep = in_box(p, states) & satisfy
     if start[0] == 1.0:
-        assert not in_box(p, states).all()  # the box acts
+        assert keep.sum() < satisfy.sum()  # the box acts: some paths that satisfy the bound leave it
     model = pw.point_model(p)
     logZ = pw.log_partition(model, regions, p.reward.temperature)
     moves = pw.point_moves(p, np.array([start]))
@@ -224,6 +226,54 @@ def test_the_box_is_known_a_bound_at_its_edge_gains_nothing_and_one_inside_it_wh
                                p.reward.temperature)
     assert gains[0] == pytest.approx(0.0, abs=1e-12)
     assert gains[1] == pytest.approx(exact, abs=1e-8) and gains[1] > 0.1
+
+def lattice_plane(periodic):
+    """x' = u in the plane on [-1.625, 1.625]^2 (13 x 13 cells of 0.25), u in {-0.5, 0, 0.5}^2, dt = 0.5, barycentric
+    (lattice-aligned: exact), y periodic or not."""
+    system = System("test_pointwise:line", ("x", "y"), ("m", "m"), ("ux", "uy"), ("m/s", "m/s"),
+                    ("y",) if periodic else (), {}, HERE)
+    grid = Grid.uniform([-1.625, -1.625], [1.625, 1.625], [13, 13], [False, periodic], ("x", "y"), ("m", "m"))
+    reward = QuadraticReward([0.0, 0.0], [0.75, 0.5], [0.2, 0.3], [2.0, 1.0], 0.7)
+    controls = np.array(list(itertools.product([-0.5, 0.0, 0.5], repeat=2)))
+    return Problem(system, grid, controls, 0.5, 3, reward, scheme="barycentric", substeps=1)
+
+
+def enumerate_all(problem, start):
+    """Every control sequence at once (vectorized :func:`enumerate_paths`): states (n, T+1, d), returns / tau."""
+    p = problem
+    seqs = np.array(list(itertools.product(range(p.n_actions), repeat=p.horizon)))
+    x = np.tile(np.asarray(start, dtype=float), (len(seqs), 1))
+    states, R = [x], np.zeros(len(seqs))
+    for t in range(p.horizon):
+        u = p.controls[seqs[:, t]]
+        R += p.reward.rate(p.grid, x, u) * p.dt
+        x = p.step(x, u)
+        states.append(x)
+    return np.stack(states, axis=1), (R + p.reward.terminal(p.grid, x)) / p.reward.temperature
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("start", [(1.5, -1.5), (-1.5, -1.25), (0.0, 1.5), (0.25, 0.0)])   # corners, edges, inside
+def test_in_two_dimensions_log_Z_near_the_box_corners_and_lower_edges_equals_enumeration_within_the_box(start,
+                                                                                                     periodic):
+    """Held out (the reviewer's cases): a periodic coordinate is never an edge; lower edges and corners are; the
+    paths that satisfy a bound but leave the box do not count."""
+    p = lattice_plane(periodic)
+    states, returns = enumerate_all(p, start)
+    model = pw.point_model(p)
+    box = in_box(p, states)
+    stays_in = start == (0.25, 0.0) or (periodic and start == (0.0, 1.5))    # y wraps: 1.5 is no edge then
+    assert box.all() == stays_in
+    for regions in ([], [Bound(0, "upper", 1.1)], [Bound(1, "lower", -1.2)]):
+        keep = box.copy()
+        for r in regions:
+            keep &= ~r.inside(states.reshape(-1, 2)).reshape(states.shape[:2]).any(axis=1)
+        logZ = pw.log_partition(model, regions, p.reward.temperature)
+        moves = pw.point_moves(p, np.array([start]))
+        cell_ok = pw.points_allowed(model, regions).any(axis=1)
+        value = pw.point_log_values(moves, logZ[1], pw.allowed_moves(regions, moves), cell_ok, p.reward.temperature)
+        assert value[0] == pytest.approx(log_Z(returns, keep), abs=1e-9), regions
+
 
 @pytest.mark.parametrize("keep_bytes", [pw.KEEP_BYTES, 0])
 @pytest.mark.parametrize("steps", [4, 2])  # whole demonstrations, and prefixes (their ends enter the gradient)

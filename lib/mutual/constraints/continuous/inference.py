@@ -230,9 +230,8 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
     seconds["model"] = time.perf_counter() - start
     start = time.perf_counter()
     regions, accepted, tables, temps, notes, stop = [], [], [], [], [], "rounds"
+    _refuse_stranded(pm, data, recording)
     tau, ll, logZ, edge, reference = _fit(pm, data, regions, temperature)
-    if not math.isfinite(ll):
-        _refuse_stranded(pm, data, recording)
     seconds["fit"] = time.perf_counter() - start
     say(0.4, "reward fitted" if temperature == "fit" else f"temperature {tau:g}")
     sizes = {"largest": largest, "smallest": smallest}
@@ -268,13 +267,16 @@ def infer(problem, recording, families=("bound",), rounds=5, min_gain=MIN_GAIN, 
 
 
 def _refuse_stranded(model, data, recording):
-    """The error for demonstrations the model cannot follow within the box (:func:`.evidence.stranded`)."""
+    """Refuse demonstrations the model cannot follow within the box (:func:`.evidence.stranded`: one backward pass,
+    before any fit; Z = 0 there whatever the reward)."""
     p, dead = model.problem, ev.stranded(model, data)
+    if not dead.size:
+        return
     names = ", ".join(repr(str(recording.ids[i])) for i in dead[:5]) + (f" and {dead.size - 5} more" if dead.size > 5 else "")
     raise ValueError(f"{recording.source}: from where demonstration(s) {names} start (or end), every path of the model "
                      f"leaves the state box within the horizon (T = {p.horizon} steps of dt = {p.dt:g} s), so the model "
-                     "cannot follow them; widen [state] low/high on the coordinates they approach, or give the [control] "
-                     "values the demonstrator used")
+                     "cannot follow them; widen [state] low/high on the coordinates they approach, give the [control] "
+                     "values the demonstrator used, or shorten [time] horizon")
 
 
 def _parameter(region, grid):
@@ -292,8 +294,9 @@ def _notes(problem, data, tables, accepted, edge, temperature):
                      "may not be what the demonstrator pursued")
     unscored = sum(int(t["gain"].isna().sum()) for t in tables)
     if unscored:
-        notes.append(f"{unscored} candidate(s) could not be scored: no trajectory on the grid respects them from some "
-                     "demonstrated start or end, though the demonstration does; use finer cells (--cells)")
+        notes.append(f"{unscored} candidate(s) could not be scored: no trajectory on the grid keeps in the box and "
+                     "respects them from some demonstrated start or end, though the demonstration does; use finer cells "
+                     "(--cells) or a wider box ([state] low/high)")
     if data.same_cell > 0.5:
         notes.append(f"{data.same_cell:.0%} of the recorded steps end in the cell they began in: the cells are coarse "
                      "for one step of dt; use finer cells or a longer dt")

@@ -32,7 +32,8 @@ the demonstrator never could, and a bound at the box's edge would then gain what
 **On the grid** Z_t is represented by averages over the *allowed* points of each cell: with the
 "sample" scheme the mean over the cell's ``samples`` points s_k outside every region of
 sum_a Phi exp(r(s_k, a)) Z_{t+1}(f(s_k, a)); with "barycentric" the cell centre, Z_{t+1} interpolated
-linearly at f(centre, a) over the Kuhn simplex's allowed vertices (weights renormalized). Z jumps to 0 at a
+linearly at f(centre, a) over the Kuhn simplex's allowed vertices (weights renormalized; a successor in the
+box but beyond the outermost centres takes the value at the nearest of them). Z jumps to 0 at a
 region's boundary; a plain cell average would mix the 0 of the points inside into the value of a
 successor that lies outside, and so charge every path that passes within a cell of a region for it --
 every candidate here touches the demonstrations, so that charge would inflate every gain. Both schemes
@@ -61,7 +62,7 @@ class Moves:
     (P,) r(point, u) dt (not tempered), the successor on the grid: ``target`` (P, k) cells with
     ``log_weight`` (P, k) (k = 1: its cell, log 1; barycentric: the d + 1 vertices and log weights), and
     ``features`` (P, d + m): the reward's features e_i^2 dt and u_j^2 dt (r = -features . weights), and
-``in_box`` (P,) whether the successor lies in the state box (module docstring)."""
+    ``in_box`` (P,) whether the successor lies in the state box (module docstring)."""
 
     point: np.ndarray
     successor: np.ndarray
