@@ -122,9 +122,12 @@ class LaneOutcomes:
         self.deadline, self.controller = deadline, os.getppid()
 
     def wait(self, stem, poll=0.2):
-        """The outcome of ``stem``'s run; a failure if the controller is gone or an hour passed without one."""
+        """The outcome of ``stem``'s run; a failure if the lane's folder was removed, the controller is gone or an
+        hour passed without one."""
         path, start = self.folder / "lane" / f"{stem}.json", time.monotonic()
         while not path.exists():
+            if not self.folder.is_dir():
+                return 1, [f"the notebook lane's folder {self.folder} was removed while the tests ran"]
             if os.getppid() != self.controller or time.monotonic() - start > self.deadline:
                 return 1, ["the notebook lane gave no outcome for this notebook (its controller stopped or hung)"]
             time.sleep(poll)
