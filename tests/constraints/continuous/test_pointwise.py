@@ -1,4 +1,4 @@
-"""The exact likelihood of continuous demonstrations (mutual.constraints.continuous.pointwise, .evidence)
+"""The exact likelihood of continuous demonstrations (mutual.constraints.continuous.pointwise, .occupancy, .evidence)
 against brute-force enumeration of every control sequence of a deterministic system.
 
 On a lattice-aligned system (a 1-D integrator whose every control moves a whole number of cells, the
@@ -15,6 +15,7 @@ import pytest
 
 from mutual.constraints.continuous import Bound, Box, Disk, Grid, Problem, QuadraticReward, Recording, named_system
 from mutual.constraints.continuous import evidence as ev
+from mutual.constraints.continuous import occupancy
 from mutual.constraints.continuous import pointwise as pw
 from mutual.constraints.continuous.systems import System
 
@@ -47,23 +48,17 @@ def line(x, u):
 
 
 def enumerate_paths(problem, start, horizon):
-    """Every control sequence from ``start``: (states (n, T+1, d), controls (n, T, m), return R / tau)."""
+    """Every control sequence from ``start``, all at once: (states (n, T+1, d), controls (n, T, m), return R / tau)."""
     p = problem
-    states, controls, returns = [], [], []
-    for seq in itertools.product(range(p.n_actions), repeat=horizon):
-        x = np.asarray(start, dtype=float)[None]
-        xs, us, R = [x[0]], [], 0.0
-        for a in seq:
-            u = p.controls[a][None]
-            R += float(p.reward.rate(p.grid, x, u)[0]) * p.dt
-            x = p.step(x, u)
-            xs.append(x[0])
-            us.append(u[0])
-        R += float(p.reward.terminal(p.grid, x)[0])
-        states.append(np.array(xs))
-        controls.append(np.array(us))
-        returns.append(R / p.reward.temperature)
-    return np.array(states), np.array(controls), np.array(returns)
+    seqs = np.array(list(itertools.product(range(p.n_actions), repeat=horizon)))
+    x = np.tile(np.asarray(start, dtype=float), (len(seqs), 1))
+    states, R = [x], np.zeros(len(seqs))
+    for t in range(horizon):
+        u = p.controls[seqs[:, t]]
+        R += p.reward.rate(p.grid, x, u) * p.dt
+        x = p.step(x, u)
+        states.append(x)
+    return np.stack(states, axis=1), p.controls[seqs], (R + p.reward.terminal(p.grid, x)) / p.reward.temperature
 
 
 def log_Z(returns, keep):
@@ -127,7 +122,7 @@ def test_spreading_mass_keeps_it_whole_splits_it_as_lambda_Z_over_the_allowed_ve
     with np.errstate(invalid="ignore"):
         share = np.nan_to_num(weight / weight.sum(axis=1, keepdims=True))
     every_move = np.bincount(moves.target.ravel(), weights=(mass[:, None] * share).ravel(), minlength=p.grid.n_cells)
-    got = pw._spread(moves, mass, logZ_next, at, norm, p.grid.n_cells)
+    got = occupancy._spread(moves, mass, logZ_next, at, norm, p.grid.n_cells)
     straddling = np.isfinite(at) & (norm > 0) & (mass > 0)
     assert straddling.any() and 0 < np.count_nonzero(mass) < moves.n_moves
     np.testing.assert_allclose(got, every_move, rtol=1e-12, atol=1e-15)
@@ -238,20 +233,6 @@ def lattice_plane(periodic):
     return Problem(system, grid, controls, 0.5, 3, reward, scheme="barycentric", substeps=1)
 
 
-def enumerate_all(problem, start):
-    """Every control sequence at once (vectorized :func:`enumerate_paths`): states (n, T+1, d), returns / tau."""
-    p = problem
-    seqs = np.array(list(itertools.product(range(p.n_actions), repeat=p.horizon)))
-    x = np.tile(np.asarray(start, dtype=float), (len(seqs), 1))
-    states, R = [x], np.zeros(len(seqs))
-    for t in range(p.horizon):
-        u = p.controls[seqs[:, t]]
-        R += p.reward.rate(p.grid, x, u) * p.dt
-        x = p.step(x, u)
-        states.append(x)
-    return np.stack(states, axis=1), (R + p.reward.terminal(p.grid, x)) / p.reward.temperature
-
-
 @pytest.mark.parametrize("periodic", [False, True])
 @pytest.mark.parametrize("start", [(1.5, -1.5), (-1.5, -1.25), (0.0, 1.5), (0.25, 0.0)])   # corners, edges, inside
 def test_in_two_dimensions_log_Z_near_the_box_corners_and_lower_edges_equals_enumeration_within_the_box(start,
@@ -259,7 +240,7 @@ def test_in_two_dimensions_log_Z_near_the_box_corners_and_lower_edges_equals_enu
     """Held out (the reviewer's cases): a periodic coordinate is never an edge; lower edges and corners are; the
     paths that satisfy a bound but leave the box do not count."""
     p = lattice_plane(periodic)
-    states, returns = enumerate_all(p, start)
+    states, _, returns = enumerate_paths(p, start, p.horizon)
     model = pw.point_model(p)
     box = in_box(p, states)
     stays_in = start == (0.25, 0.0) or (periodic and start == (0.0, 1.5))    # y wraps: 1.5 is no edge then
@@ -300,7 +281,7 @@ def test_the_likelihood_gradient_in_the_weights_equals_finite_differences_kept_s
 @pytest.mark.parametrize("bound", [0.7, 0.72])
 def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_the_lattice_under_a_bound(bound):
     """Prefixes of 2 steps (their ends enter the gradient), controls that land between centres: the expected
-    features from the ends (:func:`.pointwise.expected_features`) against central differences of their log Z
+    features from the ends (:func:`.occupancy.expected_features`) against central differences of their log Z
     (:func:`.pointwise.point_log_values`). Under the bound at 0.7 the first step from an end straddles it (an
     allowed successor with a forbidden vertex); under 0.72 a step between cells does (0.5 -> 0.705)."""
     p = off_the_lattice()
@@ -317,7 +298,7 @@ def test_the_gradient_from_the_ends_of_prefixes_equals_finite_differences_off_th
         return pw.point_log_values(data.ends, logZ[data.steps + 1], pw.allowed_moves(regions, data.ends), cell_ok,
                                    weights).sum()
 
-    expected = pw.expected_features(model, data.ends, data.steps, pw.log_partition(model, regions, w), regions, w)
+    expected = occupancy.expected_features(model, data.ends, data.steps, pw.log_partition(model, regions, w), regions, w)
     np.testing.assert_allclose(-expected, central_differences(log_z_at_the_ends, w), rtol=1e-6, atol=1e-8)
 
 

@@ -14,8 +14,8 @@ chance thresholds and greedy inference:
   mapped to cells and actions (controls inferred where they were not recorded);
 * :mod:`.regions`, :mod:`.candidates`, :mod:`.thresholds` -- bounds, disks, boxes and cells as
   chance constraints with their maximum-likelihood thresholds (eq. 3.3, Lemma 3.2.1);
-* :mod:`.pointwise`, :mod:`.evidence`, :mod:`.search`, :mod:`.inference` -- the default: the exact
-  likelihood of continuous demonstrations of a deterministic system (Z on the grid, point by point),
+* :mod:`.pointwise`, :mod:`.occupancy`, :mod:`.evidence`, :mod:`.search`, :mod:`.inference` -- the default:
+  the exact likelihood of continuous demonstrations of a deterministic system (Z on the grid, point by point),
   candidates as continuous parameters (the tightest consistent bound, the largest consistent obstacle),
   greedy inference with a stop rule on the exact gain and a likelihood interval per constraint;
 * :mod:`.cells`, :mod:`.refine` -- chapters 2-3's greedy inference on the discretized MDP itself

@@ -15,6 +15,7 @@ import numpy as np
 from scipy.optimize import minimize, minimize_scalar
 
 from . import pointwise as pw
+from .occupancy import expected_features
 from .mapping import _infer, check_box
 from .recordings import align
 
@@ -89,41 +90,43 @@ def _demonstrated_rewards(model, data, weights):
     return -(data.features @ np.asarray(weights))
 
 
+def _end_values(model, data, regions, weights, logZ):
+    """log Z at the demonstrations' starts (N,) and, for prefixes, at their ends (N,; else 0), one exact step ahead
+    of the grid's ``logZ`` (:func:`.pointwise.point_log_values`)."""
+    cell_ok = pw.points_allowed(model, regions).any(axis=1)
+
+    def at(moves, t):
+        return pw.point_log_values(moves, logZ[t], pw.allowed_moves(regions, moves), cell_ok, weights)
+    return at(data.starts, 1), (at(data.ends, data.steps + 1) if data.ends is not None else np.zeros(data.n))
+
+
 def log_likelihood(model, data, regions, weights, successors=None):
     """``(ll, logZ)``: the demonstrations' exact log-likelihood under ``regions`` with ``weights`` (a
     temperature, or per-feature weights: :func:`.pointwise.move_rewards`) (module docstring; -inf if one of
-    them enters a region) and log Z_{C,t} on the cells (``successors``: see :func:`.pointwise.log_partition`)."""
+    them enters a region, or starts where no path of the model keeps out of them and in the box) and log Z_{C,t}
+    on the cells (``successors``: see :func:`.pointwise.log_partition`)."""
     if any(r.inside(data.samples).any() for r in regions):
         return -math.inf, None
     logZ = pw.log_partition(model, regions, weights, successors)
-    cell_ok = pw.points_allowed(model, regions).any(axis=1)
-    z0 = pw.point_log_values(data.starts, logZ[1], pw.allowed_moves(regions, data.starts), cell_ok, weights)
-    if not np.isfinite(z0).all():   # a start from which no path of the model keeps out of C and in the box
+    z0, zL = _end_values(model, data, regions, weights, logZ)
+    if not np.isfinite(z0).all():
         return -math.inf, logZ
-    zL = 0.0
-    if data.ends is not None:
-        zL = pw.point_log_values(data.ends, logZ[data.steps + 1], pw.allowed_moves(regions, data.ends), cell_ok, weights)
     return float(np.sum(_demonstrated_rewards(model, data, weights) + zL - z0)), logZ
 
 
 def stranded(model, data, regions=()):
     """The demonstrations (indices) from whose start, or prefix's end, no path of the model keeps in the box
     and out of ``regions`` to the horizon (Z = 0 there: the model cannot follow them, whatever the reward)."""
-    logZ = pw.log_partition(model, regions, 1.0)
-    cell_ok = pw.points_allowed(model, regions).any(axis=1)
-    ends = [(data.starts, 1)] + ([(data.ends, data.steps + 1)] if data.ends is not None else [])
-    dead = np.zeros(data.n, dtype=bool)
-    for moves, t in ends:
-        dead |= ~np.isfinite(pw.point_log_values(moves, logZ[t], pw.allowed_moves(regions, moves), cell_ok, 1.0))
-    return np.flatnonzero(dead)
+    z0, zL = _end_values(model, data, regions, 1.0, pw.log_partition(model, regions, 1.0))
+    return np.flatnonzero(~np.isfinite(z0) | ~np.isfinite(zL))
 
 
 def log_likelihood_gradient(model, data, regions, weights, logZ, successors=None):
     """d ll / d weights (2d + m,) for per-feature weights: the model's expected features from the starts,
     less those from the ends (prefixes), less the demonstrations' own (Ziebart's eq. 2.8)."""
-    grad = pw.expected_features(model, data.starts, 0, logZ, regions, weights, successors) - data.features.sum(axis=0)
+    grad = expected_features(model, data.starts, 0, logZ, regions, weights, successors) - data.features.sum(axis=0)
     if data.ends is not None:
-        grad -= pw.expected_features(model, data.ends, data.steps, logZ, regions, weights, successors)
+        grad -= expected_features(model, data.ends, data.steps, logZ, regions, weights, successors)
     return grad
 
 

@@ -204,7 +204,7 @@ def terminal_rewards(model, weights):
     return -(model.terminal_features @ np.asarray(weights)[-model.terminal_features.shape[2]:])
 
 
-def _by_owner(moves, values):
+def by_owner(moves, values):
     """``values`` (P, ...) reshaped to (owners, fan, ...)."""
     return values.reshape((moves.n_owners, moves.fan) + values.shape[1:])
 
@@ -243,7 +243,7 @@ def log_partition(model, regions=(), weights=1.0, successors=None):
     """log Z_{C,t} (T+1, X) on the cells for the constraint set ``regions`` (module docstring). On the
     barycentric scheme a list ``successors`` receives, at index t, the successors' log Z_{t+1}
     (:func:`successor_log_values`, an interpolation worth keeping when they fit in ``KEEP_BYTES``), for
-    :func:`expected_features` to reuse."""
+    :func:`.occupancy.expected_features` to reuse."""
     mv = model.moves
     ok = points_allowed(model, regions)
     n_ok, cell_ok = ok.sum(axis=1), ok.any(axis=1)
@@ -258,7 +258,7 @@ def log_partition(model, regions=(), weights=1.0, successors=None):
         at = successor_log_values(mv, logZ[t + 1], cell_ok, norm)
         if keep:
             successors[t] = at
-        q = _by_owner(mv, move_reward + at)
+        q = by_owner(mv, move_reward + at)
         logZ[t] = np.where(cell_ok, logsumexp(q, axis=1) - log0(np.maximum(n_ok, 1)), -np.inf)
     return logZ
 
@@ -312,7 +312,7 @@ def satisfaction(model, logZ, regions, candidates, weights, times):
     for t in range(model.horizon - 1, -1, -1):
         at = successor_log_values(mv, logZ[t + 1], cell_ok, norm)
         q = move_reward + at
-        p = probabilities(_by_owner(mv, q), logZ[t] + log0(ok.sum(axis=1)))
+        p = probabilities(by_owner(mv, q), logZ[t] + log0(ok.sum(axis=1)))
         F = _weighted_sums(mv, p, extra, logZ[t + 1], at, norm, F) * n_ratio
         if t in times:
             out[t] = F
@@ -337,14 +337,14 @@ def _weighted_sums(mv, p, extra, logZ_next, at, norm, F_next):
         share = vertex_shares(mv.log_weight, mv.target, logZ_next, at, norm)
         at_successor = np.einsum("pk,pkc->pc", share, np.take(F_next, mv.target, axis=0))
     at_successor *= extra
-    return np.einsum("of,ofc->oc", p, _by_owner(mv, at_successor))
+    return np.einsum("of,ofc->oc", p, by_owner(mv, at_successor))
 
 
 def point_log_values(moves, logZ_next, allowed, cell_ok, weights):
     """log Z_t at continuous points, one exact step ahead of the grid's log Z_{t+1} (``logZ_next`` (X,)):
     log sum_a Phi exp(r dt/tau) Z_{t+1}(f(s, a)) (N,) for the points of ``moves`` (:func:`point_moves`)."""
     q = np.where(allowed, move_rewards(moves, weights), -np.inf) + successor_log_values(moves, logZ_next, cell_ok)
-    return logsumexp(_by_owner(moves, q), axis=1)
+    return logsumexp(by_owner(moves, q), axis=1)
 
 
 def point_ratios(model, moves, logZ_next, F_next, regions, candidates, weights):
@@ -353,51 +353,6 @@ def point_ratios(model, moves, logZ_next, F_next, regions, candidates, weights):
     cell_ok, extra = _candidate_terms(model, moves, regions, candidates)
     norm = successor_norm(moves, cell_ok)
     at = successor_log_values(moves, logZ_next, cell_ok, norm)
-    q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
+    q = by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
     p = probabilities(q, logsumexp(q, axis=1))
     return _weighted_sums(moves, p, extra, logZ_next, at, norm, F_next)
-
-
-def _spread(moves, mass, logZ_next, at, norm, n_cells):
-    """The cells' occupancy (X,) after the moves carry ``mass`` (P,) to their successors, a successor split
-    over its vertices by :func:`vertex_shares`. Only the moves with mass are read: the others add exact
-    zeros, so the sums are the same to the last bit (most cells hold no mass in the first steps from the
-    demonstrated starts)."""
-    if moves.target.shape[1] == 1:
-        return np.bincount(moves.target[:, 0], weights=np.where(np.isfinite(at), mass, 0.0), minlength=n_cells)
-    moving = np.flatnonzero(mass)
-    target = moves.target[moving]
-    share = vertex_shares(moves.log_weight[moving], target, logZ_next, at[moving], norm[moving])
-    return np.bincount(target.ravel(), weights=(mass[moving, None] * share).ravel(), minlength=n_cells)
-
-
-def expected_features(model, moves, t0, logZ, regions, weights, successors=None):
-    """The expected features (d + m running, then d terminal) of the futures from the points of ``moves`` at
-    time ``t0`` to the horizon under ``regions``, summed over the points: Algorithm 1 on the point model (the
-    first step exactly from the points, then the cells' occupancy). Their difference from the
-    demonstrations' features is the gradient of the log-likelihood in the weights. ``successors``: what
-    :func:`log_partition` kept for this ``logZ`` (none or empty: computed here)."""
-    mv, X, T = model.moves, model.points.shape[0], model.horizon
-    ok = points_allowed(model, regions)
-    cell_ok, n_ok = ok.any(axis=1), ok.sum(axis=1)
-    run = mv.features.shape[1]
-    total = np.zeros(run + model.terminal_features.shape[2])
-    first_norm = successor_norm(moves, cell_ok)     # the first step, from the points
-    at = successor_log_values(moves, logZ[t0 + 1], cell_ok, first_norm)
-    q = _by_owner(moves, np.where(allowed_moves(regions, moves), move_rewards(moves, weights), -np.inf) + at)
-    p = probabilities(q, logsumexp(q, axis=1))
-    total[:run] += np.einsum("of,ofk->k", p, _by_owner(moves, moves.features))
-    D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, first_norm, X)
-    move_reward = np.where(allowed_moves(regions, mv), move_rewards(mv, weights), -np.inf)
-    norm = successor_norm(mv, cell_ok)
-    for t in range(t0 + 1, T):
-        at = successors[t] if successors else successor_log_values(mv, logZ[t + 1], cell_ok, norm)
-        w = D[:, None] * probabilities(_by_owner(mv, move_reward + at), logZ[t] + log0(n_ok))
-        total[:run] += np.einsum("of,ofk->k", w, _by_owner(mv, mv.features))
-        D = _spread(mv, w.reshape(-1), logZ[t + 1], at, norm, X)
-    term = np.where(ok, terminal_rewards(model, weights), -np.inf)
-    with np.errstate(invalid="ignore"):
-        share = np.exp(term - logZ[T][:, None] - log0(n_ok)[:, None])
-    share[~np.isfinite(share)] = 0.0
-    total[run:] += np.einsum("x,xm,xmd->d", D, share, model.terminal_features)
-    return total
