@@ -28,7 +28,8 @@ def expected_features(model, moves, t0, logZ, regions, weights, successors=None)
     time ``t0`` to the horizon under ``regions``, summed over the points: Algorithm 1 on the point model (the
     first step exactly from the points, then the cells' occupancy). Their difference from the
     demonstrations' features is the gradient of the log-likelihood in the weights. ``successors``: what
-    :func:`.pointwise.log_partition` kept for this ``logZ`` (none or empty: computed here)."""
+    :func:`.pointwise.log_partition` kept for this ``logZ`` (none or empty: computed here). A move's features do
+    not change with time, so its probabilities are summed over the steps and weight its features once."""
     mv, X, T = model.moves, model.points.shape[0], model.horizon
     ok = pw.points_allowed(model, regions)
     cell_ok, n_ok = ok.any(axis=1), ok.sum(axis=1)
@@ -38,15 +39,17 @@ def expected_features(model, moves, t0, logZ, regions, weights, successors=None)
     at = pw.successor_log_values(moves, logZ[t0 + 1], cell_ok, first_norm)
     q = pw.by_owner(moves, np.where(pw.allowed_moves(regions, moves), pw.move_rewards(moves, weights), -np.inf) + at)
     p = probabilities(q, logsumexp(q, axis=1))
-    total[:run] += np.einsum("of,ofk->k", p, pw.by_owner(moves, moves.features))
+    total[:run] += p.reshape(-1) @ moves.features
     D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, first_norm, X)
     move_reward = np.where(pw.allowed_moves(regions, mv), pw.move_rewards(mv, weights), -np.inf)
     norm = pw.successor_norm(mv, cell_ok)
+    visits = np.zeros(mv.features.shape[0])          # each move's probability, summed over the steps
     for t in range(t0 + 1, T):
         at = successors[t] if successors else pw.successor_log_values(mv, logZ[t + 1], cell_ok, norm)
-        w = D[:, None] * probabilities(pw.by_owner(mv, move_reward + at), logZ[t] + log0(n_ok))
-        total[:run] += np.einsum("of,ofk->k", w, pw.by_owner(mv, mv.features))
-        D = _spread(mv, w.reshape(-1), logZ[t + 1], at, norm, X)
+        w = (D[:, None] * probabilities(pw.by_owner(mv, move_reward + at), logZ[t] + log0(n_ok))).reshape(-1)
+        visits += w
+        D = _spread(mv, w, logZ[t + 1], at, norm, X)
+    total[:run] += visits @ mv.features
     term = np.where(ok, pw.terminal_rewards(model, weights), -np.inf)
     with np.errstate(invalid="ignore"):
         share = np.exp(term - logZ[T][:, None] - log0(n_ok)[:, None])
