@@ -395,3 +395,20 @@ def test_in_two_dimensions_a_candidates_gain_equals_the_difference_of_exact_log_
     np.testing.assert_allclose(gains[np.isfinite(exact)], exact[np.isfinite(exact)], rtol=1e-9, atol=1e-9)
     F = pw.satisfaction(model, logZ, base, candidates, w, set(range(p.horizon + 1)))
     assert_F_is_the_ratio_of_partition_functions(model, logZ, base, candidates, w, F)
+
+
+def test_the_allowed_moves_kept_for_a_constraint_set_are_those_computed_afresh_and_cannot_be_changed(plane):
+    """:func:`.pointwise.allowed_moves` keeps Phi_C for the last few sets: a set asked again (equal, not the same
+    object), after others pushed it out, or with an unhashable field gives what the regions say move by move."""
+    p, base, *_ = plane
+    moves = pw.point_model(p).moves
+
+    def afresh(regions):
+        return moves.in_box & ~np.any([pw.blocked(r, moves.point, moves.successor) for r in regions], axis=0)
+    sets = [base[:k] for k in range(len(base) + 1)] + [[Disk((0, 1), (0.9, -0.6), 0.4 + 0.05 * i)] for i in range(6)]
+    for regions in sets + sets[::-1] + [[Disk((0, 1), [-0.6, -0.9], 0.45)]]:
+        ok = pw.allowed_moves(regions, moves)
+        np.testing.assert_array_equal(ok, afresh(regions) if regions else moves.in_box)
+        assert not ok.flags.writeable
+    assert len(moves.allowed_kept) == pw.KEPT_SETS
+    assert pw.allowed_moves([Bound(1, "lower", -0.63)], moves) is pw.allowed_moves((Bound(1, "lower", -0.63),), moves)

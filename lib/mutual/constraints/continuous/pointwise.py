@@ -52,6 +52,7 @@ from .discretization import kuhn_weights
 from .logspace import log0, logsumexp, logsumexp_rows, probabilities, ratio
 
 SEGMENT_POINTS = 3      # interior points at which a move's straight segment is checked against obstacles
+KEPT_SETS = 4           # constraint sets whose allowed moves are kept on the moves (:func:`allowed_moves`)
 KEEP_BYTES = 2 ** 28   # at most this much of log Z at the successors is kept between the value and its gradient
 
 
@@ -80,6 +81,11 @@ class Moves:
     @property
     def n_owners(self):
         return self.reward.size // self.fan
+
+    @cached_property
+    def allowed_kept(self):
+        """:func:`allowed_moves` of the last few constraint sets (a dict, oldest first)."""
+        return {}
 
     @cached_property
     def by_vertex(self):
@@ -171,11 +177,24 @@ def point_moves(problem, points):
 
 
 def allowed_moves(regions, moves):
-    """Phi_C per move (P,): the move's successor lies in the box, and its point, successor and segment outside
-    every region."""
+    """Phi_C per move (P,; read-only): the move's successor lies in the box, and its point, successor and segment
+    outside every region. Kept on ``moves`` for the last ``KEPT_SETS`` constraint sets: a reward fit evaluates one
+    set about a hundred times."""
+    key, kept = tuple(regions), moves.allowed_kept
+    try:
+        if key in kept:
+            return kept[key]
+    except TypeError:       # a region with an unhashable field (a list): computed, not kept
+        key = None
     ok = moves.in_box.copy()
     for region in regions:
         ok &= ~blocked(region, moves.point, moves.successor)
+    ok.flags.writeable = False
+    if key is None:
+        return ok
+    if len(kept) >= KEPT_SETS:
+        del kept[next(iter(kept))]
+    kept[key] = ok
     return ok
 
 
@@ -335,7 +354,10 @@ def _weighted_sums(mv, p, extra, logZ_next, at, norm, F_next):
         at_successor = np.take(F_next, mv.target[:, 0], axis=0)
     else:
         share = vertex_shares(mv.log_weight, mv.target, logZ_next, at, norm)
-        at_successor = np.einsum("pk,pkc->pc", share, np.take(F_next, mv.target, axis=0))
+        targets = mv.by_vertex[0]
+        at_successor = share[:, 0, None] * F_next[targets[0]]     # vertex by vertex: no (P, k, K) array
+        for j in range(1, len(targets)):
+            at_successor += share[:, j, None] * F_next[targets[j]]
     at_successor *= extra
     return np.einsum("of,ofc->oc", p, by_owner(mv, at_successor))
 
