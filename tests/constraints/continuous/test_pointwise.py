@@ -410,5 +410,6 @@ def test_the_allowed_moves_kept_for_a_constraint_set_are_those_computed_afresh_a
         ok = pw.allowed_moves(regions, moves)
         np.testing.assert_array_equal(ok, afresh(regions) if regions else moves.in_box)
         assert not ok.flags.writeable
+    np.testing.assert_array_equal(pw.allowed_moves((r for r in base[1:]), moves), afresh(base[1:]))  # a generator
     assert len(moves.allowed_kept) == pw.KEPT_SETS
     assert pw.allowed_moves([Bound(1, "lower", -0.63)], moves) is pw.allowed_moves((Bound(1, "lower", -0.63),), moves)

@@ -43,7 +43,7 @@ def expected_features(model, moves, t0, logZ, regions, weights, successors=None)
     D = _spread(moves, p.reshape(-1), logZ[t0 + 1], at, first_norm, X)
     move_reward = np.where(pw.allowed_moves(regions, mv), pw.move_rewards(mv, weights), -np.inf)
     norm = pw.successor_norm(mv, cell_ok)
-    visits = np.zeros(mv.features.shape[0])          # each move's probability, summed over the steps
+    visits = np.zeros(mv.features.shape[0])          # each move's expected visits, summed over the steps
     for t in range(t0 + 1, T):
         at = successors[t] if successors else pw.successor_log_values(mv, logZ[t + 1], cell_ok, norm)
         w = (D[:, None] * probabilities(pw.by_owner(mv, move_reward + at), logZ[t] + log0(n_ok))).reshape(-1)

@@ -178,23 +178,23 @@ def point_moves(problem, points):
 
 def allowed_moves(regions, moves):
     """Phi_C per move (P,; read-only): the move's successor lies in the box, and its point, successor and segment
-    outside every region. Kept on ``moves`` for the last ``KEPT_SETS`` constraint sets: a reward fit evaluates one
-    set about a hundred times."""
-    key, kept = tuple(regions), moves.allowed_kept
+    outside every region. Kept on ``moves`` for the last ``KEPT_SETS`` constraint sets computed: a reward fit
+    evaluates one set about a hundred times."""
+    regions, kept = tuple(regions), moves.allowed_kept
     try:
-        if key in kept:
-            return kept[key]
+        if regions in kept:
+            return kept[regions]
+        keep = True
     except TypeError:       # a region with an unhashable field (a list): computed, not kept
-        key = None
+        keep = False
     ok = moves.in_box.copy()
     for region in regions:
         ok &= ~blocked(region, moves.point, moves.successor)
     ok.flags.writeable = False
-    if key is None:
-        return ok
-    if len(kept) >= KEPT_SETS:
-        del kept[next(iter(kept))]
-    kept[key] = ok
+    if keep:
+        if len(kept) >= KEPT_SETS:
+            del kept[next(iter(kept))]
+        kept[regions] = ok
     return ok
 
 

@@ -15,7 +15,7 @@ import jax.numpy as jnp
 
 from ..riccati import LQStage, mv, positive_definite, riccati_step
 
-BACKWARD_UNROLL = 1  # stages per iteration of the backward scan: 4 compiled 1.5-2x slower and ran no faster (JAX 0.10, CPU)
+BACKWARD_UNROLL = 1  # stages per trip of the backward scan: 4 compiled 1.5-2x slower, ran no faster (JAX 0.10)
 
 
 def _stage(carry, stage, reg, n, curvature_weight):
