@@ -29,7 +29,7 @@ def expected_features(model, moves, t0, logZ, regions, weights, successors=None)
     first step exactly from the points, then the cells' occupancy). Their difference from the
     demonstrations' features is the gradient of the log-likelihood in the weights. ``successors``: what
     :func:`.pointwise.log_partition` kept for this ``logZ`` (none or empty: computed here). A move's features do
-    not change with time, so its probabilities are summed over the steps and weight its features once."""
+    not change with time, so its expected visits are summed over the steps and weight its features once."""
     mv, X, T = model.moves, model.points.shape[0], model.horizon
     ok = pw.points_allowed(model, regions)
     cell_ok, n_ok = ok.any(axis=1), ok.sum(axis=1)
