@@ -80,21 +80,28 @@ def test_unbounded_lq_problem_is_reported_as_the_riccati_solver_does():
         _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N)
 
 
+def dyn(x, u, p):
+    return x + 0.1 * u
+
+
+def run(x, u, p):
+    return jnp.sum(u ** 2) + jnp.sum(x ** 2)
+
+
+def term(x, p):
+    return jnp.sum(x ** 2)
+
+
+def reward_effort(x, u, p):
+    return -jnp.sum(u ** 2)
+
+
 def test_objective_unbounded_in_the_controls_is_reported():
     """u = 0 is stationary for -|u|^2 + |x_N|^2 but a maximum: iLQR must not return it."""
-    def dynamics(x, u, params):
-        return x + u
-
-    def running(x, u, params):
-        return -jnp.sum(u ** 2)
-
-    def terminal(x, params):
-        return jnp.sum(x ** 2)
-
     with pytest.raises(ILQRError, match="not a local minimum|unbounded"):
-        ilqr(dynamics, running, terminal, np.zeros(2), np.zeros((5, 2)))
+        ilqr(dyn, reward_effort, term, np.zeros(2), np.zeros((5, 2)))
     with pytest.raises(ILQRError, match="unbounded"):
-        ilqr(dynamics, running, terminal, np.zeros(2), np.ones((5, 2)))
+        ilqr(dyn, reward_effort, term, np.zeros(2), np.ones((5, 2)))
 
 
 def _pendulum():
@@ -194,7 +201,7 @@ def test_far_initial_guess_is_not_mistaken_for_a_solution(start):
 
 def test_far_initial_guess_on_the_nonlinear_problem_still_converges_to_a_minimum():
     task, w0, w1 = es.figure_scenario("7.2", steps=30)
-    r = es.solve(task, w0, np.full((30, 1), 50.0), max_iter=500)
+    r = es.solve(task, w0, np.full((30, 1), 50.0))
     value, grad = es.cost_gradient(task, w0, r.us)
     assert np.abs(grad).max() <= 1e-6 * r.magnitude
     assert r.cost < es.cost(task, w0, np.full((30, 1), 50.0))
@@ -303,18 +310,6 @@ def test_legible_iteration_costs_at_most_the_sum_of_the_hypotheses():
     assert plain < legible <= 2 * plain
 
 
-def dyn(x, u, p):
-    return x + 0.1 * u
-
-
-def run(x, u, p):
-    return jnp.sum(u ** 2) + jnp.sum(x ** 2)
-
-
-def term(x, p):
-    return jnp.sum(x ** 2)
-
-
 X0, US = np.ones(2), np.zeros((5, 2))
 
 
@@ -339,7 +334,6 @@ CASES = [
     (ilqr, (dyn, run, term, X0, US), {"target": np.inf}, ValueError, "target must be None or a finite number"),
     (ilqr, (dyn, run, term, X0, US), {"target": "low"}, ValueError, "target must be None or a finite number"),
     (ilqr, (dyn, run, term, X0, US, np.array([np.nan])), {}, ValueError, "params must be finite"),
-    (ilqr, (dyn, lambda x, u, p: -jnp.sum(u ** 2), term, X0, US), {}, ILQRError, "unbounded"),
     # ilqr_batch
     (ilqr_batch, (dyn, run, term, X0, US[None]), {}, ValueError, "x0 must have shape (B, n)"),
     (ilqr_batch, (dyn, run, term, np.ones((3, 2)), np.zeros((2, 5, 2))), {}, ValueError, "us must have shape (B, N, m)"),
