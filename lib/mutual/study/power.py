@@ -23,7 +23,6 @@ contrast then depends on the other contrasts, and :mod:`.rm_batch` simulates it.
 """
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 import pandas as pd
@@ -31,6 +30,7 @@ from scipy import optimize, stats
 
 from ..inputs import check_number, number, probability
 from .published import design_from_f_dofs
+from .rm_batch import tukey_critical_value
 
 
 def _effect(f, partial_eta_squared, rho, m=None):
@@ -272,14 +272,7 @@ def tukey_rm_power(dz, n, m, alpha=0.05):
     n, m = check_number("n", n, low=2, integer=True), check_number("m", m, low=2, integer=True)
     alpha = probability("alpha", alpha)
     df = (m - 1) * (n - 1)
-    return _two_sided_t_power(_dz(dz) * np.sqrt(n), df, _tukey_critical(alpha, m, df))
-
-
-@lru_cache(maxsize=4096)
-def _tukey_critical(alpha, m, df):
-    """``q(alpha; m, df) / sqrt 2``: SciPy's studentized range quantile, a numerical integral and root (about
-    0.1 s), kept, since a sample-size search and a power curve ask for the same ``df`` again."""
-    return stats.studentized_range.isf(alpha, m, df) / np.sqrt(2)
+    return _two_sided_t_power(_dz(dz) * np.sqrt(n), df, tukey_critical_value(alpha, m, df) / np.sqrt(2))
 
 
 def contrast_sample_size(dz, power, m=3, alpha=0.05, test="tukey", n_max=10_000):

@@ -80,28 +80,22 @@ def test_unbounded_lq_problem_is_reported_as_the_riccati_solver_does():
         _lq_ilqr(A, B, Q, R, QN, q, qN, x0, N)
 
 
-def dyn(x, u, p):
-    return x + 0.1 * u
-
-
-def run(x, u, p):
-    return jnp.sum(u ** 2) + jnp.sum(x ** 2)
-
-
-def term(x, p):
-    return jnp.sum(x ** 2)
-
-
-def reward_effort(x, u, p):
-    return -jnp.sum(u ** 2)
-
-
 def test_objective_unbounded_in_the_controls_is_reported():
-    """u = 0 is stationary for -|u|^2 + |x_N|^2 but a maximum: iLQR must not return it."""
+    """u = 0 is stationary for -|u|^2 + |x_N|^2 but a saddle, whose negative curvature shows only through the
+    backward recursion: iLQR must not return it; from u = 1 it finds the objective unbounded."""
+    def dynamics(x, u, params):
+        return x + u
+
+    def running(x, u, params):
+        return -jnp.sum(u ** 2)
+
+    def terminal(x, params):
+        return jnp.sum(x ** 2)
+
     with pytest.raises(ILQRError, match="not a local minimum|unbounded"):
-        ilqr(dyn, reward_effort, term, np.zeros(2), np.zeros((5, 2)))
+        ilqr(dynamics, running, terminal, np.zeros(2), np.zeros((5, 2)))
     with pytest.raises(ILQRError, match="unbounded"):
-        ilqr(dyn, reward_effort, term, np.zeros(2), np.ones((5, 2)))
+        ilqr(dynamics, running, terminal, np.zeros(2), np.ones((5, 2)))
 
 
 def _pendulum():
@@ -250,7 +244,7 @@ def test_a_shrinking_batch_gives_each_member_its_own_passes():
     """Members that stop early leave the batch (gathered into ever smaller batches): each member
     still takes exactly the passes, and reaches the cost, that it takes alone."""
     task, w0, w1 = es.figure_scenario("7.2", steps=30)
-    alphas = np.linspace(0.3, 3.0, 16)  # legible solves of very different lengths (16 = SHRINK_FROM: it shrinks to 4)
+    alphas = np.linspace(0.3, 3.0, 20)  # legible solves of very different lengths
     weights = [es.legible_weights(w1, w0, a) for a in alphas]
     batch = es.solve_batch(task, weights)
     passes = []
@@ -308,6 +302,18 @@ def test_legible_iteration_costs_at_most_the_sum_of_the_hypotheses():
     dyn, run, term, x0, p = es.literal_legible_problem(task, w0, w1, 0.5)
     legible = iteration_flops(dyn, run, term, x0, task.zero_controls(), p)
     assert plain < legible <= 2 * plain
+
+
+def dyn(x, u, p):
+    return x + 0.1 * u
+
+
+def run(x, u, p):
+    return jnp.sum(u ** 2) + jnp.sum(x ** 2)
+
+
+def term(x, p):
+    return jnp.sum(x ** 2)
 
 
 X0, US = np.ones(2), np.zeros((5, 2))
