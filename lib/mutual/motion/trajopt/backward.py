@@ -15,8 +15,6 @@ import jax.numpy as jnp
 
 from ..riccati import LQStage, mv, positive_definite, riccati_step
 
-BACKWARD_UNROLL = 1  # stages per trip of the backward scan: 4 compiled 1.5-2x slower, ran no faster (JAX 0.10)
-
 
 def _stage(carry, stage, reg, n, curvature_weight):
     """One stage of the recursion: ``(V, v)`` at ``k + 1`` to ``(V, v)`` at ``k`` and the gains ``[k K]``."""
@@ -40,7 +38,7 @@ def backward_pass(model, mu, curvature_weight=1.0):
     reg = mu * model.c * jnp.eye(m)
     stages = (model.F, model.g, model.H) if model.curvature is None else (model.F, model.g, model.H, model.curvature)
     zero = jnp.zeros(())
+    # not unrolled: unroll=4 compiled 1.5-2x slower and ran no faster (JAX 0.10, CPU)
     (_, _, d1, d2, ok), G = jax.lax.scan(lambda carry, stage: _stage(carry, stage, reg, n, curvature_weight),
-                                         (model.VN, model.vN, zero, zero, jnp.ones((), bool)), stages, reverse=True,
-                                         unroll=BACKWARD_UNROLL)
+                                         (model.VN, model.vN, zero, zero, jnp.ones((), bool)), stages, reverse=True)
     return G, d1, d2, ok
