@@ -54,3 +54,22 @@ def test_figure_and_table_names_are_checked(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="anim"):
         save_animation(None, "fig_9_1")
     assert (tmp_path / "table_9_1.md").read_text().splitlines()[0] == "| set | fp |"
+
+
+
+def test_a_quick_run_saves_the_png_alone(tmp_path, monkeypatch):
+    """The runner's --quick (the tests' notebook lane) writes the PNG and no PDF; a full run writes both. (Not
+    the same PNG bytes: a full run draws the PDF first, which can move the tight box by a pixel.)"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    for mode in ("full", "quick"):
+        monkeypatch.setenv("MUTUAL_OUTPUT_DIR", str(tmp_path / mode))
+        monkeypatch.setenv("MUTUAL_RUN_MODE", mode)
+        fig, ax = plt.subplots()
+        ax.plot([0, 1, 4])
+        savefig(fig, "fig_9_2")
+        plt.close(fig)
+    assert sorted(p.name for p in (tmp_path / "full").iterdir()) == ["fig_9_2.pdf", "fig_9_2.png"]
+    assert sorted(p.name for p in (tmp_path / "quick").iterdir()) == ["fig_9_2.png"]
+    assert (tmp_path / "quick" / "fig_9_2.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

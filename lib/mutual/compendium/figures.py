@@ -2,8 +2,9 @@
 
 Figures are named by their thesis number (``fig_3_1``; our own figures of a chapter ``fig_3_lemma``, and
 of an extension beyond the thesis ``fig_ext_cycle_learn``, so that no name claims a thesis figure it is not)
-and saved as PDF and PNG, tables (``table_5_1``, ``table_ext_power_simulated``) as CSV and Markdown, all
-written atomically and with no metadata that changes between runs, so a rerun gives identical bytes.
+and saved as PDF and PNG (a quick run, the tests' notebook lane: PNG only), tables (``table_5_1``,
+``table_ext_power_simulated``) as CSV and Markdown, all written atomically and with no metadata that changes
+between runs, so a rerun gives identical bytes.
 """
 
 import os
@@ -12,6 +13,7 @@ import re
 from ..atomic import atomic_path, write_text
 from ..style import CYCLE, PALETTE, use_style  # noqa: F401 (the notebooks' one import)
 from .paths import figures_dir, saved
+from .runs import ENV_MODE
 
 _NAME = re.compile(r"^(fig|table|anim)_([0-9]+|ext)_[a-z0-9_]+$")
 MAX_ANIMATION_BYTES = 2 * 1024 * 1024
@@ -25,7 +27,9 @@ def _check_name(name, kind):
 
 
 def savefig(fig, name):
-    """Save ``fig`` as ``<name>.pdf`` and ``<name>.png`` in the figures folder; return the paths."""
+    """Save ``fig`` as ``<name>.pdf`` and ``<name>.png`` in the figures folder; return the paths. In a quick run
+    (the runner's ``--quick``) the PNG only: it draws every artist the PDF would, and the vector backend took
+    a sixth of the quick runs' time (every full run, ``make figures``, writes both)."""
     _check_name(name, "fig")
     os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
     out = figures_dir()
@@ -34,7 +38,7 @@ def savefig(fig, name):
         "png": {"Software": None},
     }
     paths = []
-    for ext in ("pdf", "png"):
+    for ext in ("png",) if os.environ.get(ENV_MODE) == "quick" else ("pdf", "png"):
         target = out / f"{name}.{ext}"
         with atomic_path(target) as tmp:
             fig.savefig(tmp, format=ext, metadata=metadata[ext])
