@@ -13,7 +13,7 @@ import re
 from ..atomic import atomic_path, write_text
 from ..style import CYCLE, PALETTE, use_style  # noqa: F401 (the notebooks' one import)
 from .paths import figures_dir, saved
-from .runs import ENV_MODE
+from .runs import current_mode
 
 _NAME = re.compile(r"^(fig|table|anim)_([0-9]+|ext)_[a-z0-9_]+$")
 MAX_ANIMATION_BYTES = 2 * 1024 * 1024
@@ -27,9 +27,8 @@ def _check_name(name, kind):
 
 
 def savefig(fig, name):
-    """Save ``fig`` as ``<name>.pdf`` and ``<name>.png`` in the figures folder; return the paths. In a quick run
-    (the runner's ``--quick``) the PNG only: it draws every artist the PDF would, and the vector backend took
-    a sixth of the quick runs' time (every full run, ``make figures``, writes both)."""
+    """Save ``fig`` as ``<name>.pdf`` and ``<name>.png`` in the figures folder; return the paths. A quick run (the
+    runner's ``--quick`` alone, as in the tests' notebook lane) writes the PNG alone; every other run writes both."""
     _check_name(name, "fig")
     os.environ.setdefault("SOURCE_DATE_EPOCH", "0")
     out = figures_dir()
@@ -38,12 +37,12 @@ def savefig(fig, name):
         "png": {"Software": None},
     }
     paths = []
-    for ext in ("png",) if os.environ.get(ENV_MODE) == "quick" else ("pdf", "png"):
+    for ext in ("png",) if current_mode() == "quick" else ("pdf", "png"):
         target = out / f"{name}.{ext}"
         with atomic_path(target) as tmp:
             fig.savefig(tmp, format=ext, metadata=metadata[ext])
         paths.append(target)
-    return saved(*paths)
+    return [saved(p) for p in paths]
 
 
 def save_animation(animation, name, fps=10, dpi=80):

@@ -55,6 +55,14 @@ def shown(path) -> str:
         return str(path)
 
 
+def current_mode() -> str:
+    """The mode of the run this process belongs to: the runner's, which its kernels carry with the notebook's path,
+    else ``interactive`` (a lab, a script)."""
+    if not os.environ.get(ENV_NOTEBOOK):
+        return "interactive"
+    return os.environ.get(ENV_MODE, "custom")
+
+
 def kernel_env(path, parameters) -> dict:
     """Environment variables that tell a kernel which run it belongs to."""
     return {ENV_MODE: run_mode(parameters), ENV_NOTEBOOK: str(Path(path).resolve()),
@@ -68,7 +76,7 @@ def run_record(notebook: str) -> dict:
         if Path(runner_path).stem != notebook:
             raise ValueError(f"write_results({notebook!r}) called from notebook {Path(runner_path).name}: "
                              f"name the results after the notebook's file ({Path(runner_path).stem!r})")
-        return {"mode": os.environ.get(ENV_MODE, "custom"), "notebook": shown(runner_path),
+        return {"mode": current_mode(), "notebook": shown(runner_path),
                 "code_sha256": os.environ.get(ENV_SHA) or code_sha256(runner_path),
                 "parameters": json.loads(os.environ.get(ENV_PARAMETERS) or "{}")}
     path = NOTEBOOKS / f"{notebook}.ipynb"
